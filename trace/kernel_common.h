@@ -1,0 +1,103 @@
+/* Helpers for the per-ISA kernel files (compiled once per set, like them).
+ * Everything here is static inline: see simd/simd.h. */
+#ifndef LANES_TRACE_KERNEL_COMMON_H
+#define LANES_TRACE_KERNEL_COMMON_H
+
+#include "simd/simd.h"
+#include "trace/kernels.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Kernel bodies are instantiated twice by their entry points, once with
+ * counting and once with stats == NULL, so that the second copy carries no
+ * counting code at all. That only works when the body is really inlined. */
+#define LANES_BODY static inline __attribute__((always_inline))
+
+/* Lane accounting for one vector iteration whose real lanes are `live`. */
+#define LANES_COUNT(stats, live)                                                           \
+    do {                                                                                   \
+        if (stats) {                                                                       \
+            (stats)->vector_ops++;                                                         \
+            (stats)->lane_slots += LANES_W;                                                \
+            (stats)->active_lanes += (uint64_t)vm_popcount(live);                          \
+        }                                                                                  \
+    } while (0)
+
+/* Writes the LANES_W result bits of the iteration starting at element i
+ * (i is a multiple of LANES_W, and 32 is a multiple of LANES_W). */
+static inline void lanes_put_bits(uint32_t *mask, size_t i, vmask m)
+{
+    uint32_t bits = vm_bits(m);
+    if (i % 32 == 0)
+        mask[i / 32] = bits;
+    else
+        mask[i / 32] |= bits << (i % 32);
+}
+
+/* Ray data of one vector iteration, by position (idx == NULL) or through an
+ * index array. Past n, lanes repeat the first ray of the iteration: it is
+ * valid data, and `live` masks the lanes out. */
+typedef struct {
+    vfloat ox, oy, oz, dx, dy, dz, rdx, rdy, rdz, tnear, tfar;
+    vmask live;
+} lanes_vray;
+
+LANES_BODY lanes_vray lanes_load_rays(const lanes_rays *r, const uint32_t *idx, size_t i, size_t n,
+                                      bool with_dir, bool with_rdir)
+{
+    lanes_vray v;
+    size_t rem = n - i;
+    v.live = vm_first_n(rem);
+    if (idx) {
+        vint id;
+        if (rem >= LANES_W) {
+            id = vi_loadu((const int32_t *)(const void *)(idx + i));
+        } else {
+            int32_t tail[LANES_W];
+            for (size_t j = 0; j < LANES_W; j++) tail[j] = (int32_t)idx[i + (j < rem ? j : 0)];
+            id = vi_loadu(tail);
+        }
+        v.ox = vf_gather(r->ox, id);
+        v.oy = vf_gather(r->oy, id);
+        v.oz = vf_gather(r->oz, id);
+        v.tnear = vf_gather(r->tnear, id);
+        v.tfar = vf_gather(r->tfar, id);
+        if (with_dir) {
+            v.dx = vf_gather(r->dx, id);
+            v.dy = vf_gather(r->dy, id);
+            v.dz = vf_gather(r->dz, id);
+        }
+        if (with_rdir) {
+            v.rdx = vf_gather(r->rdx, id);
+            v.rdy = vf_gather(r->rdy, id);
+            v.rdz = vf_gather(r->rdz, id);
+        }
+    } else {
+        /* SoA arrays are padded to LANES_MAX_W, so full loads stay inside. */
+        v.ox = vf_load(r->ox + i);
+        v.oy = vf_load(r->oy + i);
+        v.oz = vf_load(r->oz + i);
+        v.tnear = vf_load(r->tnear + i);
+        v.tfar = vf_load(r->tfar + i);
+        if (with_dir) {
+            v.dx = vf_load(r->dx + i);
+            v.dy = vf_load(r->dy + i);
+            v.dz = vf_load(r->dz + i);
+        }
+        if (with_rdir) {
+            v.rdx = vf_load(r->rdx + i);
+            v.rdy = vf_load(r->rdy + i);
+            v.rdz = vf_load(r->rdz + i);
+        }
+    }
+    if (!with_dir) v.dx = v.dy = v.dz = vf_zero();
+    if (!with_rdir) v.rdx = v.rdy = v.rdz = vf_zero();
+    return v;
+}
+
+/* Unit roundoff of float, for the outward widening of conservative bounds. */
+#define LANES_U 0x1p-24f
+
+#endif

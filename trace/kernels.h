@@ -1,0 +1,234 @@
+/* The hot kernels' data layouts and the table through which every caller
+ * reaches them. The kernels themselves are written once (trace/<family>_kernels.c)
+ * and compiled per instruction set; each set fills one lanes_kernels table.
+ *
+ * Compiled for the x86-64 baseline: no intrinsics here.
+ *
+ * Conventions shared by every kernel:
+ * - A ray is o + t*d for t in the closed interval [tnear, tfar].
+ * - Boxes are closed: a ray touching a face, edge or corner hits.
+ *   A box with min > max on any axis is empty and never hit.
+ * - Rays pass through lanes_rays_prepare() first. It computes reciprocal
+ *   directions and turns every invalid ray (NaN or infinite component in o or
+ *   d, NaN tnear or tfar, d = 0) into an inactive one (tnear = +inf,
+ *   tfar = -inf), which no kernel ever reports as a hit.
+ * - Hit masks are bit arrays: bit i of word i/32 is ray (or primitive) i.
+ * - Where a kernel writes per-hit values (t, u, v), it writes them only for
+ *   hits; the caller's values for misses are left untouched.
+ * - Arrays are 64-byte aligned and padded: every SoA array holds a multiple
+ *   of LANES_MAX_W elements, so full-width loads past the count stay inside
+ *   the allocation. Results past the count are never written.
+ * - stats, when not NULL, accumulates lane accounting. With NULL the kernel
+ *   runs a copy of its body with the counting compiled out.
+ */
+#ifndef LANES_TRACE_KERNELS_H
+#define LANES_TRACE_KERNELS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "simd/isa.h"
+
+#define LANES_MAX_W 16
+#define LANES_ALIGN 64
+
+/* Rays in structure-of-arrays form. */
+typedef struct lanes_rays {
+    float *ox, *oy, *oz;
+    float *dx, *dy, *dz;
+    float *rdx, *rdy, *rdz; /* 1/d, filled by lanes_rays_prepare */
+    float *tnear, *tfar;
+    size_t count;     /* rays in use */
+    size_t capacity;  /* allocated, a multiple of LANES_MAX_W */
+} lanes_rays;
+
+/* One ray, with its reciprocal direction (see lanes_ray_prepare). */
+typedef struct lanes_ray {
+    float o[3], d[3], rd[3];
+    float tnear, tfar;
+} lanes_ray;
+
+typedef struct lanes_box {
+    float min[3], max[3];
+} lanes_box;
+
+/* Boxes in structure-of-arrays form, the layout of a wide BVH node. */
+typedef struct lanes_boxes {
+    float *minx, *miny, *minz, *maxx, *maxy, *maxz;
+    size_t count, capacity;
+} lanes_boxes;
+
+typedef struct lanes_triangle {
+    float v0[3], v1[3], v2[3];
+} lanes_triangle;
+
+/* Triangles in structure-of-arrays form. Vertices, not edges, are stored:
+ * the watertight test needs each shared vertex transformed identically. */
+typedef struct lanes_triangles {
+    float *v0x, *v0y, *v0z, *v1x, *v1y, *v1z, *v2x, *v2y, *v2z;
+    size_t count, capacity;
+} lanes_triangles;
+
+/* Ray/triangle algorithms. */
+typedef enum lanes_tri_algo {
+    LANES_TRI_MOLLER = 0,     /* Möller–Trumbore, two-sided, hit iff det != 0 */
+    LANES_TRI_WATERTIGHT = 1, /* Woop, Benthin, Wald 2013, double fallback at 0 */
+    LANES_TRI_ALGO_COUNT
+} lanes_tri_algo;
+
+/* How directions are inverted. */
+typedef enum lanes_rcp_mode {
+    LANES_RCP_EXACT = 0,  /* 1/d by division */
+    LANES_RCP_FAST = 1,   /* hardware estimate plus one Newton step */
+    LANES_RCP_MODE_COUNT
+} lanes_rcp_mode;
+
+/* Results of the per-element triangle kernels. */
+typedef struct lanes_tri_hits {
+    float *t, *u, *v; /* u, v: barycentric weights of v1 and v2 */
+} lanes_tri_hits;
+
+/* A bound on a set of rays, for culling boxes and triangles that none of
+ * them can hit. Two representations, both built from the same rays:
+ *
+ * - Intervals (Reshetov et al. 2005 corner rays; Boulos et al. 2006 interval
+ *   arithmetic): per axis, the range of origins, of directions and of
+ *   reciprocal directions. An axis whose directions change sign or touch 0
+ *   has ia_axis_ok = 0 and takes no part in the slab-interval test.
+ * - Planes (Reshetov 2007 vertex culling, Wu 2016 2.2.3): the dominant axis
+ *   k (all directions share its sign), the near plane x_k = near at the
+ *   smallest origin (largest, when directions point down k), and on each
+ *   other axis a lower and an upper bounding plane
+ *      x_a >= lo0[a] + lo_slope[a] * (x_k - near) * sign,  x_a <= hi0[a] + ...
+ *   that hold for every point of every ray beyond the near plane.
+ *   has_planes = 0 when no axis is shared by all directions.
+ *
+ * Every quantity is widened outward (outward rounding), so a cull is
+ * conservative: no box or triangle that any of the rays hits is rejected. */
+typedef struct lanes_frustum {
+    bool valid;            /* false: some ray is invalid or too large; culls nothing */
+    bool empty;            /* no active rays: culls everything */
+    float tnear, tfar;     /* min tnear, max tfar of the active rays */
+    float omin[3], omax[3];
+    float dmin[3], dmax[3];
+    float rmin[3], rmax[3];
+    bool ia_axis_ok[3];
+    bool has_planes;
+    int k;                 /* dominant axis */
+    float ksign;           /* +1 or -1: the sign of every d[k] */
+    float near;            /* the near plane's coordinate on axis k */
+    float lo0[3], lo_slope[3], hi0[3], hi_slope[3]; /* used for the two axes != k */
+} lanes_frustum;
+
+typedef enum lanes_cull_method {
+    LANES_CULL_INTERVAL = 1, /* slab intervals for boxes, Boulos IA for triangles */
+    LANES_CULL_PLANES = 2,   /* bounding planes (vertex culling) */
+    LANES_CULL_BOTH = 3
+} lanes_cull_method;
+
+/* Lane accounting: how full the vectors were. */
+typedef struct lanes_lane_stats {
+    uint64_t vector_ops;   /* vector iterations of a kernel's main loop */
+    uint64_t lane_slots;   /* vector_ops * lanes */
+    uint64_t active_lanes; /* lanes that carried a real ray or primitive */
+} lanes_lane_stats;
+
+/* The kernels of one instruction set. Every entry is filled. */
+typedef struct lanes_kernels {
+    lanes_isa isa;
+    int lanes;
+    const char *name;
+    /* The compiler's view when this set was built, checked by the tests:
+     * bit 0 SSE4.1, 1 AVX, 2 AVX2, 3 FMA, 4 AVX-512F. */
+    uint32_t compiled_features;
+
+    /* Computes 1/d and deactivates invalid rays (see above). */
+    void (*rays_prepare)(lanes_rays *rays, lanes_rcp_mode mode);
+
+    /* N rays against one box. idx, when not NULL, names the rays to test
+     * (idx[0..n-1]) and bit i of hit is the ray idx[i]; otherwise rays 0..n-1.
+     * tentry (may be NULL) receives max(tnear, entry distance) for hits.
+     * Returns the number of hits. */
+    size_t (*box_packet)(const lanes_rays *rays, const uint32_t *idx, size_t n,
+                         const lanes_box *box, uint32_t *hit, float *tentry,
+                         lanes_lane_stats *stats);
+    /* Partition step of partition traversal: writes to out the entries of
+     * idx[0..n-1] whose rays hit the box, in order, and returns their number
+     * (out may equal idx). */
+    size_t (*box_partition)(const lanes_rays *rays, const uint32_t *idx, size_t n,
+                            const lanes_box *box, uint32_t *out,
+                            lanes_lane_stats *stats);
+    /* One ray against N boxes. */
+    size_t (*box_wide)(const lanes_ray *ray, const lanes_boxes *boxes, size_t n,
+                       uint32_t *hit, float *tentry, lanes_lane_stats *stats);
+
+    /* N rays against one triangle: per-ray results, for hits only. */
+    size_t (*tri_packet[LANES_TRI_ALGO_COUNT])(const lanes_rays *rays, const uint32_t *idx,
+                                               size_t n, const lanes_triangle *tri,
+                                               uint32_t *hit, lanes_tri_hits *out,
+                                               lanes_lane_stats *stats);
+    /* N rays against one triangle, occlusion only: hit bits, no t/u/v. */
+    size_t (*tri_packet_any[LANES_TRI_ALGO_COUNT])(const lanes_rays *rays, const uint32_t *idx,
+                                                   size_t n, const lanes_triangle *tri,
+                                                   uint32_t *hit, lanes_lane_stats *stats);
+    /* One ray against N triangles: per-triangle results, for hits only. */
+    size_t (*tri_wide[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray, const lanes_triangles *tris,
+                                             size_t n, uint32_t *hit, lanes_tri_hits *out,
+                                             lanes_lane_stats *stats);
+    /* One ray against N triangles, closest hit: returns the index of the
+     * nearest hit (ties: the lowest index) or -1, and its t, u, v. */
+    long (*tri_wide_closest[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray,
+                                                   const lanes_triangles *tris, size_t n,
+                                                   float *t, float *u, float *v,
+                                                   lanes_lane_stats *stats);
+    /* One ray against N triangles, occlusion: stops at the first vector
+     * holding a hit. */
+    bool (*tri_wide_any[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray, const lanes_triangles *tris,
+                                               size_t n, lanes_lane_stats *stats);
+
+    /* Builds the frustum of rays idx[0..n-1] (all of 0..n-1 when idx is NULL),
+     * SIMD across the rays. */
+    void (*frustum_build)(const lanes_rays *rays, const uint32_t *idx, size_t n,
+                          lanes_frustum *f);
+    /* Culling, SIMD across primitives: bit i set = primitive i may be hit
+     * by some ray of the frustum; clear = no ray can hit it. Returns the
+     * number of bits set. */
+    size_t (*frustum_boxes)(const lanes_frustum *f, const lanes_boxes *boxes, size_t n,
+                            lanes_cull_method method, uint32_t *keep,
+                            lanes_lane_stats *stats);
+    size_t (*frustum_tris)(const lanes_frustum *f, const lanes_triangles *tris, size_t n,
+                           lanes_cull_method method, uint32_t *keep,
+                           lanes_lane_stats *stats);
+} lanes_kernels;
+
+/* The table of the active set (lanes_isa_current()). */
+const lanes_kernels *lanes_kernels_current(void);
+/* The table of a given set, or NULL when it is not compiled in. Calling a
+ * table the CPU cannot run is the caller's fault: check
+ * lanes_isa_supported() first. */
+const lanes_kernels *lanes_kernels_for(lanes_isa isa);
+
+/* Scalar setup of one ray (reciprocal by division); returns false, and makes
+ * the ray inactive, when it is invalid. */
+bool lanes_ray_prepare(lanes_ray *ray);
+
+/* Allocation of padded, aligned SoA arrays; counts are checked against
+ * overflow. Return false on failure (absurd size, out of memory). */
+bool lanes_rays_alloc(lanes_rays *rays, size_t count);
+void lanes_rays_free(lanes_rays *rays);
+bool lanes_boxes_alloc(lanes_boxes *boxes, size_t count);
+void lanes_boxes_free(lanes_boxes *boxes);
+bool lanes_triangles_alloc(lanes_triangles *tris, size_t count);
+void lanes_triangles_free(lanes_triangles *tris);
+bool lanes_tri_hits_alloc(lanes_tri_hits *hits, size_t count);
+void lanes_tri_hits_free(lanes_tri_hits *hits);
+
+/* Bit-array helpers. */
+static inline size_t lanes_mask_words(size_t n) { return (n + 31) / 32; }
+static inline bool lanes_mask_get(const uint32_t *mask, size_t i)
+{
+    return (mask[i / 32] >> (i % 32)) & 1u;
+}
+
+#endif

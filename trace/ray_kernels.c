@@ -1,0 +1,40 @@
+/* Ray set-up, SIMD across rays: reciprocal directions, and invalid rays
+ * made inactive so that no kernel can report them as hits. */
+#include "trace/kernel_common.h"
+#include "trace/kernel_decls.h"
+
+/* x * 0 == 0 holds exactly for finite x: NaN and ±inf give NaN. */
+LANES_BODY vmask finite(vfloat x) { return vf_eq(vf_mul(x, vf_zero()), vf_zero()); }
+
+void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
+{
+    const vfloat zero = vf_zero();
+    for (size_t i = 0; i < r->count; i += LANES_W) {
+        vmask live = vm_first_n(r->count - i);
+        vfloat dx = vf_load(r->dx + i), dy = vf_load(r->dy + i), dz = vf_load(r->dz + i);
+        vfloat tnear = vf_load(r->tnear + i), tfar = vf_load(r->tfar + i);
+        vmask ok = vm_and(finite(vf_load(r->ox + i)),
+                          vm_and(finite(vf_load(r->oy + i)), finite(vf_load(r->oz + i))));
+        ok = vm_and(ok, vm_and(finite(dx), vm_and(finite(dy), finite(dz))));
+        ok = vm_and(ok, vm_not(vm_or(vf_isnan(tnear), vf_isnan(tfar))));
+        ok = vm_and(ok, vm_or(vf_neq(dx, zero), vm_or(vf_neq(dy, zero), vf_neq(dz, zero))));
+        vfloat rdx, rdy, rdz;
+        if (mode == LANES_RCP_FAST) {
+            /* The estimate is inf for ±0 and for denormals, and the Newton
+             * step turns inf into NaN (0 * inf): tiny components take the
+             * exact reciprocal (±inf for ±0), which the slab test handles. */
+            const vfloat tiny = vf_set1(0x1p-60f);
+            rdx = vf_select(vf_lt(vf_abs(dx), tiny), vf_rcp(dx), vf_rcp_nr(dx));
+            rdy = vf_select(vf_lt(vf_abs(dy), tiny), vf_rcp(dy), vf_rcp_nr(dy));
+            rdz = vf_select(vf_lt(vf_abs(dz), tiny), vf_rcp(dz), vf_rcp_nr(dz));
+        } else {
+            rdx = vf_rcp(dx), rdy = vf_rcp(dy), rdz = vf_rcp(dz);
+        }
+        vf_store_masked(r->rdx + i, live, rdx);
+        vf_store_masked(r->rdy + i, live, rdy);
+        vf_store_masked(r->rdz + i, live, rdz);
+        vmask dead = vm_andnot(live, ok);
+        vf_store_masked(r->tnear + i, dead, vf_set1(INFINITY));
+        vf_store_masked(r->tfar + i, dead, vf_set1(-INFINITY));
+    }
+}
