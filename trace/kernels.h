@@ -15,9 +15,10 @@
  * - Hit masks are bit arrays: bit i of word i/32 is ray (or primitive) i.
  * - Where a kernel writes per-hit values (t, u, v), it writes them only for
  *   hits; the caller's values for misses are left untouched.
- * - Arrays are 64-byte aligned and padded: every SoA array holds a multiple
- *   of LANES_MAX_W elements, so full-width loads past the count stay inside
- *   the allocation. Results past the count are never written.
+ * - Arrays are 64-byte aligned and padded (lanes_*_alloc): past the count
+ *   they hold at least LANES_MAX_W more elements, so a full-width load that
+ *   starts at any element below the count stays inside the allocation.
+ *   Results past the count are never written.
  * - stats, when not NULL, accumulates lane accounting. With NULL the kernel
  *   runs a copy of its body with the counting compiled out.
  */
@@ -40,7 +41,7 @@ typedef struct lanes_rays {
     float *rdx, *rdy, *rdz; /* 1/d, filled by lanes_rays_prepare */
     float *tnear, *tfar;
     size_t count;     /* rays in use */
-    size_t capacity;  /* allocated, a multiple of LANES_MAX_W */
+    size_t capacity;  /* allocated elements per array */
 } lanes_rays;
 
 /* One ray, with its reciprocal direction (see lanes_ray_prepare). */
@@ -63,7 +64,8 @@ typedef struct lanes_triangle {
     float v0[3], v1[3], v2[3];
 } lanes_triangle;
 
-/* Triangles in structure-of-arrays form. Vertices, not edges, are stored:
+/* Triangles in structure-of-arrays form (the wide kernels load them
+ * unaligned, so a view may start at any element). Vertices, not edges, are stored:
  * the watertight test needs each shared vertex transformed identically. */
 typedef struct lanes_triangles {
     float *v0x, *v0y, *v0z, *v1x, *v1y, *v1z, *v2x, *v2y, *v2z;

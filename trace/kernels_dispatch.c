@@ -68,12 +68,14 @@ bool lanes_ray_prepare(lanes_ray *ray)
     return ok;
 }
 
-/* count padded to LANES_MAX_W elements, or 0 when that overflows or is absurd. */
+/* count rounded up to LANES_MAX_W plus LANES_MAX_W elements of slack, so a
+ * full-width load starting at any element below count stays inside; 0 when
+ * the size is absurd. */
 static size_t padded(size_t count)
 {
     const size_t limit = ((size_t)1 << 40) / sizeof(float); /* 1 TiB per array */
     if (count > limit) return 0;
-    return (count + LANES_MAX_W - 1) / LANES_MAX_W * LANES_MAX_W;
+    return (count + LANES_MAX_W - 1) / LANES_MAX_W * LANES_MAX_W + LANES_MAX_W;
 }
 
 /* Allocates n float arrays of one padded size, zero-filled so that the
@@ -81,8 +83,7 @@ static size_t padded(size_t count)
 static bool alloc_arrays(float **arrays[], int n, size_t count, size_t *capacity)
 {
     size_t cap = padded(count);
-    if (cap == 0 && count != 0) return false;
-    if (cap == 0) cap = LANES_MAX_W;
+    if (cap == 0) return false;
     for (int i = 0; i < n; i++) *arrays[i] = NULL;
     for (int i = 0; i < n; i++) {
         *arrays[i] = aligned_alloc(LANES_ALIGN, cap * sizeof(float));

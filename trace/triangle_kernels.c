@@ -202,7 +202,8 @@ LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
                        want_uv);
 }
 
-/* One ray against the triangles i .. i+LANES_W-1. */
+/* One ray against the triangles i .. i+LANES_W-1. Unaligned loads: a BVH
+ * leaf's triangles start anywhere in the leaf-ordered arrays. */
 typedef struct {
     const float *v[3][3]; /* [vertex][axis], axes permuted for the watertight test */
     vfloat ox, oy, oz, dx, dy, dz, sx, sy, sz, tnear, tfar;
@@ -237,16 +238,16 @@ LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size
 {
     if (algo == LANES_TRI_WATERTIGHT)
         return watertight_core(
-            vf_sub(vf_load(w->v[0][0] + i), w->ox), vf_sub(vf_load(w->v[0][1] + i), w->oy),
-            vf_sub(vf_load(w->v[0][2] + i), w->oz), vf_sub(vf_load(w->v[1][0] + i), w->ox),
-            vf_sub(vf_load(w->v[1][1] + i), w->oy), vf_sub(vf_load(w->v[1][2] + i), w->oz),
-            vf_sub(vf_load(w->v[2][0] + i), w->ox), vf_sub(vf_load(w->v[2][1] + i), w->oy),
-            vf_sub(vf_load(w->v[2][2] + i), w->oz), w->sx, w->sy, w->sz, w->tnear, tfar, live,
+            vf_sub(vf_loadu(w->v[0][0] + i), w->ox), vf_sub(vf_loadu(w->v[0][1] + i), w->oy),
+            vf_sub(vf_loadu(w->v[0][2] + i), w->oz), vf_sub(vf_loadu(w->v[1][0] + i), w->ox),
+            vf_sub(vf_loadu(w->v[1][1] + i), w->oy), vf_sub(vf_loadu(w->v[1][2] + i), w->oz),
+            vf_sub(vf_loadu(w->v[2][0] + i), w->ox), vf_sub(vf_loadu(w->v[2][1] + i), w->oy),
+            vf_sub(vf_loadu(w->v[2][2] + i), w->oz), w->sx, w->sy, w->sz, w->tnear, tfar, live,
             want_uv);
-    return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, vf_load(w->v[0][0] + i),
-                       vf_load(w->v[0][1] + i), vf_load(w->v[0][2] + i), vf_load(w->v[1][0] + i),
-                       vf_load(w->v[1][1] + i), vf_load(w->v[1][2] + i), vf_load(w->v[2][0] + i),
-                       vf_load(w->v[2][1] + i), vf_load(w->v[2][2] + i), w->tnear, tfar, live,
+    return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, vf_loadu(w->v[0][0] + i),
+                       vf_loadu(w->v[0][1] + i), vf_loadu(w->v[0][2] + i), vf_loadu(w->v[1][0] + i),
+                       vf_loadu(w->v[1][1] + i), vf_loadu(w->v[1][2] + i), vf_loadu(w->v[2][0] + i),
+                       vf_loadu(w->v[2][1] + i), vf_loadu(w->v[2][2] + i), w->tnear, tfar, live,
                        want_uv);
 }
 
