@@ -97,6 +97,14 @@ LANES_BODY lanes_vray lanes_load_rays(const lanes_rays *r, const uint32_t *idx, 
     return v;
 }
 
+/* The wide BVH this set's traversal reads: one node test is one vector
+ * operation, except for the scalar set, which loops over a 4-wide node. */
+#if LANES_W == 1
+#define LANES_WIDE_WIDTH 4
+#else
+#define LANES_WIDE_WIDTH LANES_W
+#endif
+
 /* Unit roundoff of float, for the outward widening of conservative bounds. */
 #define LANES_U 0x1p-24f
 

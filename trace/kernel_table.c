@@ -22,4 +22,9 @@ const lanes_kernels LANES_FN(lanes_kernels) = {
     .frustum_build = LANES_FN(lanes_frustum_build),
     .frustum_boxes = LANES_FN(lanes_frustum_boxes),
     .frustum_tris = LANES_FN(lanes_frustum_tris),
+    .wide_width = LANES_WIDE_WIDTH,
+    .trace_wide = LANES_FN(lanes_trace_wide),
+    .occluded_wide = LANES_FN(lanes_occluded_wide),
+    .trace_bvh2 = LANES_FN(lanes_trace_bvh2),
+    .occluded_bvh2 = LANES_FN(lanes_occluded_bvh2),
 };

@@ -136,6 +136,27 @@ typedef struct lanes_lane_stats {
     uint64_t active_lanes; /* lanes that carried a real ray or primitive */
 } lanes_lane_stats;
 
+/* Result of a closest-hit query. prim is the scene triangle index, or
+ * LANES_NO_HIT; u, v are the barycentric weights of v1 and v2. */
+#define LANES_NO_HIT 0xffffffffu
+typedef struct lanes_hit {
+    float t, u, v;
+    uint32_t prim;
+} lanes_hit;
+
+/* What a traversal did, for the utilisation studies. */
+typedef struct lanes_trace_stats {
+    uint64_t rays;
+    uint64_t nodes_visited;     /* interior node tests (one node, all its children) */
+    uint64_t leaves_visited;
+    uint64_t triangles_tested;
+    lanes_lane_stats node_lanes; /* lanes of the box tests that held a real child */
+    lanes_lane_stats leaf_lanes; /* lanes of the triangle tests that held a real triangle */
+} lanes_trace_stats;
+
+struct lanes_bvh2;
+struct lanes_wbvh;
+
 /* The kernels of one instruction set. Every entry is filled. */
 typedef struct lanes_kernels {
     lanes_isa isa;
@@ -202,6 +223,22 @@ typedef struct lanes_kernels {
     size_t (*frustum_tris)(const lanes_frustum *f, const lanes_triangles *tris, size_t n,
                            lanes_cull_method method, uint32_t *keep,
                            lanes_lane_stats *stats);
+
+    /* Single-ray traversal of n prepared rays (lanes_ray_prepare), one after
+     * the other. The wide form reads a wide BVH of wide_width children
+     * (SIMD across a node's children and across a leaf's triangles); the
+     * BVH2 form visits two children at a time, as the thesis' "single"
+     * baseline, and tests leaf triangles with the wide triangle kernel. */
+    int wide_width;
+    void (*trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_tri_algo algo,
+                       const lanes_ray *rays, size_t n, lanes_hit *hits, lanes_trace_stats *stats);
+    void (*occluded_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
+                          lanes_tri_algo algo, const lanes_ray *rays, size_t n, uint8_t *occluded,
+                          lanes_trace_stats *stats);
+    void (*trace_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+                       size_t n, lanes_hit *hits, lanes_trace_stats *stats);
+    void (*occluded_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+                          size_t n, uint8_t *occluded, lanes_trace_stats *stats);
 } lanes_kernels;
 
 /* The table of the active set (lanes_isa_current()). */

@@ -1,0 +1,302 @@
+/* The ray/triangle cores shared by the triangle kernels and the BVH
+ * traversals of one kernel set. Included only by per-ISA files; everything
+ * is static inline (see simd/simd.h).
+ *
+ * Both tests are two-sided and count the triangle's boundary as inside; the
+ * hit interval [tnear, tfar] is closed and checked with ordered compares, so
+ * a NaN anywhere is a miss. */
+#ifndef LANES_TRACE_TRIANGLE_CORE_H
+#define LANES_TRACE_TRIANGLE_CORE_H
+
+#include "trace/kernel_common.h"
+
+#include <float.h>
+
+typedef struct {
+    vfloat t, u, v;
+    vmask hit;
+} tri_result;
+
+/* Möller–Trumbore (1997). Epsilon policy: none. The test rejects only
+ * det == 0 exactly (the ray lies in the triangle's plane, or the triangle is
+ * degenerate in a way the rounding preserves); a nearly parallel ray gets a
+ * large, finite t, which the [tnear, tfar] check then judges. FMA is used in
+ * the cross and dot products where the set has it (vf_fmadd), so sets with
+ * and without FMA differ by rounding; see tests/. */
+LANES_BODY tri_result moller_core(vfloat ox, vfloat oy, vfloat oz, vfloat dx, vfloat dy, vfloat dz,
+                                  vfloat v0x, vfloat v0y, vfloat v0z, vfloat v1x, vfloat v1y,
+                                  vfloat v1z, vfloat v2x, vfloat v2y, vfloat v2z, vfloat tnear,
+                                  vfloat tfar, vmask live, bool want_uv)
+{
+    tri_result r;
+    vfloat e1x = vf_sub(v1x, v0x), e1y = vf_sub(v1y, v0y), e1z = vf_sub(v1z, v0z);
+    vfloat e2x = vf_sub(v2x, v0x), e2y = vf_sub(v2y, v0y), e2z = vf_sub(v2z, v0z);
+    vfloat px = vf_fmsub(dy, e2z, vf_mul(dz, e2y));
+    vfloat py = vf_fmsub(dz, e2x, vf_mul(dx, e2z));
+    vfloat pz = vf_fmsub(dx, e2y, vf_mul(dy, e2x));
+    vfloat det = vf_fmadd(e1x, px, vf_fmadd(e1y, py, vf_mul(e1z, pz)));
+    vfloat tx = vf_sub(ox, v0x), ty = vf_sub(oy, v0y), tz = vf_sub(oz, v0z);
+    vfloat uu = vf_fmadd(tx, px, vf_fmadd(ty, py, vf_mul(tz, pz)));
+    vfloat qx = vf_fmsub(ty, e1z, vf_mul(tz, e1y));
+    vfloat qy = vf_fmsub(tz, e1x, vf_mul(tx, e1z));
+    vfloat qz = vf_fmsub(tx, e1y, vf_mul(ty, e1x));
+    vfloat vv = vf_fmadd(dx, qx, vf_fmadd(dy, qy, vf_mul(dz, qz)));
+    vfloat tt = vf_fmadd(e2x, qx, vf_fmadd(e2y, qy, vf_mul(e2z, qz)));
+    vfloat inv = vf_rcp(det);
+    vfloat u = vf_mul(uu, inv), v = vf_mul(vv, inv), t = vf_mul(tt, inv);
+    vfloat zero = vf_zero();
+    vmask m = vm_and(live, vf_neq(det, zero));
+    m = vm_and(m, vm_and(vf_ge(u, zero), vf_ge(v, zero)));
+    m = vm_and(m, vf_le(vf_add(u, v), vf_set1(1.0f)));
+    m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
+    r.hit = m;
+    r.t = t;
+    r.u = want_uv ? u : zero;
+    r.v = want_uv ? v : zero;
+    return r;
+}
+
+/* Keeps the sign of a double edge function when it is narrowed to float. */
+static inline float narrow_signed(double x)
+{
+    float f = (float)x;
+    if (f == 0.0f && x != 0.0) f = x > 0.0 ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
+    return f;
+}
+
+/* Woop, Benthin and Wald (2013), after the per-ray permutation: a, b, c are
+ * the vertices minus the ray origin with axes permuted so that z is the
+ * ray's dominant axis (kz), and sx, sy, sz the shear that maps the ray to +z.
+ * No FMA anywhere: the edge functions must be exact negations of each other
+ * across a shared edge, and a*b - c*d fused is not antisymmetric. */
+LANES_BODY tri_result watertight_core(vfloat ax, vfloat ay, vfloat az, vfloat bx, vfloat by,
+                                      vfloat bz, vfloat cx, vfloat cy, vfloat cz, vfloat sx,
+                                      vfloat sy, vfloat sz, vfloat tnear, vfloat tfar, vmask live,
+                                      bool want_uv)
+{
+    tri_result r;
+    vfloat Ax = vf_sub(ax, vf_mul(sx, az)), Ay = vf_sub(ay, vf_mul(sy, az));
+    vfloat Bx = vf_sub(bx, vf_mul(sx, bz)), By = vf_sub(by, vf_mul(sy, bz));
+    vfloat Cx = vf_sub(cx, vf_mul(sx, cz)), Cy = vf_sub(cy, vf_mul(sy, cz));
+    vfloat U = vf_sub(vf_mul(Cx, By), vf_mul(Cy, Bx));
+    vfloat V = vf_sub(vf_mul(Ax, Cy), vf_mul(Ay, Cx));
+    vfloat W = vf_sub(vf_mul(Bx, Ay), vf_mul(By, Ax));
+    vfloat zero = vf_zero();
+
+    /* An edge function of exactly 0 may be rounding: recompute those lanes
+     * in double, where the products of two floats are exact and the
+     * difference is rounded once, so the sign is right. */
+    vmask on_edge = vm_and(live, vm_or(vf_eq(U, zero), vm_or(vf_eq(V, zero), vf_eq(W, zero))));
+    if (vm_any(on_edge)) {
+        float fAx[LANES_W], fAy[LANES_W], fBx[LANES_W], fBy[LANES_W], fCx[LANES_W], fCy[LANES_W];
+        float fU[LANES_W], fV[LANES_W], fW[LANES_W];
+        vf_storeu(fAx, Ax), vf_storeu(fAy, Ay), vf_storeu(fBx, Bx), vf_storeu(fBy, By);
+        vf_storeu(fCx, Cx), vf_storeu(fCy, Cy);
+        vf_storeu(fU, U), vf_storeu(fV, V), vf_storeu(fW, W);
+        uint32_t bits = vm_bits(on_edge);
+        for (int j = 0; j < LANES_W; j++) {
+            if (!(bits & (1u << j))) continue;
+            fU[j] = narrow_signed((double)fCx[j] * fBy[j] - (double)fCy[j] * fBx[j]);
+            fV[j] = narrow_signed((double)fAx[j] * fCy[j] - (double)fAy[j] * fCx[j]);
+            fW[j] = narrow_signed((double)fBx[j] * fAy[j] - (double)fBy[j] * fAx[j]);
+        }
+        U = vf_loadu(fU), V = vf_loadu(fV), W = vf_loadu(fW);
+    }
+
+    vmask any_neg = vm_or(vf_lt(U, zero), vm_or(vf_lt(V, zero), vf_lt(W, zero)));
+    vmask any_pos = vm_or(vf_gt(U, zero), vm_or(vf_gt(V, zero), vf_gt(W, zero)));
+    vfloat det = vf_add(vf_add(U, V), W);
+    vmask m = vm_andnot(live, vm_and(any_neg, any_pos));
+    m = vm_and(m, vf_neq(det, zero));
+    if (vm_none(m)) {
+        r.hit = m;
+        r.t = r.u = r.v = zero;
+        return r;
+    }
+    vfloat Az = vf_mul(sz, az), Bz = vf_mul(sz, bz), Cz = vf_mul(sz, cz);
+    vfloat T = vf_add(vf_add(vf_mul(U, Az), vf_mul(V, Bz)), vf_mul(W, Cz));
+    vfloat inv = vf_rcp(det);
+    vfloat t = vf_mul(T, inv);
+    m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
+    r.hit = m;
+    r.t = t;
+    r.u = want_uv ? vf_mul(V, inv) : zero;
+    r.v = want_uv ? vf_mul(W, inv) : zero;
+    return r;
+}
+
+/* The watertight test's per-ray set-up: kz the axis of largest |d|, kx and ky
+ * the next two in cyclic order, swapped when d[kz] < 0 to keep the winding;
+ * the shear that maps d to +z. */
+typedef struct {
+    int kx, ky, kz;
+    float sx, sy, sz;
+} wt_setup;
+
+static inline wt_setup wt_setup_ray(const float d[3])
+{
+    wt_setup s;
+    float ax = fabsf(d[0]), ay = fabsf(d[1]), az = fabsf(d[2]);
+    s.kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    s.kx = (s.kz + 1) % 3;
+    s.ky = (s.kx + 1) % 3;
+    if (d[s.kz] < 0.0f) {
+        int k = s.kx;
+        s.kx = s.ky;
+        s.ky = k;
+    }
+    s.sx = d[s.kx] / d[s.kz];
+    s.sy = d[s.ky] / d[s.kz];
+    s.sz = 1.0f / d[s.kz];
+    return s;
+}
+
+/* Per-lane versions of the same choice for a packet, where every lane may
+ * have its own axes: selects between the three components. */
+LANES_BODY vfloat pick3(vmask is0, vmask is1, vfloat x, vfloat y, vfloat z)
+{
+    return vf_select(is0, x, vf_select(is1, y, z));
+}
+
+LANES_BODY tri_result watertight_packet_core(const lanes_vray *r, const lanes_triangle *tri,
+                                             bool want_uv)
+{
+    vfloat adx = vf_abs(r->dx), ady = vf_abs(r->dy), adz = vf_abs(r->dz);
+    /* kz = 0 if |dx| is largest, 1 if |dy|, else 2 (ties as in wt_setup_ray) */
+    vmask z0 = vm_and(vf_ge(adx, ady), vf_ge(adx, adz));
+    vmask z1 = vm_andnot(vm_and(vm_not(vf_ge(adx, ady)), vf_ge(ady, adz)), z0);
+    vmask z2 = vm_not(vm_or(z0, z1));
+    vfloat dkz = pick3(z0, z1, r->dx, r->dy, r->dz);
+    vmask flip = vf_lt(dkz, vf_zero());
+    /* cyclic successor: kx = kz+1, ky = kz+2; swapped when flip */
+    vmask x0 = vm_xor(z2, vm_and(flip, vm_xor(z2, z1))); /* kx == 0: (!flip & kz==2) | (flip & kz==1) */
+    vmask x1 = vm_xor(z0, vm_and(flip, vm_xor(z0, z2))); /* kx == 1: (!flip & kz==0) | (flip & kz==2) */
+    vmask y0 = vm_xor(z1, vm_and(flip, vm_xor(z1, z2))); /* ky == 0: (!flip & kz==1) | (flip & kz==2) */
+    vmask y1 = vm_xor(z2, vm_and(flip, vm_xor(z2, z0))); /* ky == 1: (!flip & kz==2) | (flip & kz==0) */
+    vfloat dkx = pick3(x0, x1, r->dx, r->dy, r->dz);
+    vfloat dky = pick3(y0, y1, r->dx, r->dy, r->dz);
+    vfloat sz = vf_rcp(dkz);
+    vfloat sx = vf_div(dkx, dkz), sy = vf_div(dky, dkz);
+
+    vfloat a0 = vf_sub(vf_set1(tri->v0[0]), r->ox), a1 = vf_sub(vf_set1(tri->v0[1]), r->oy),
+           a2 = vf_sub(vf_set1(tri->v0[2]), r->oz);
+    vfloat b0 = vf_sub(vf_set1(tri->v1[0]), r->ox), b1 = vf_sub(vf_set1(tri->v1[1]), r->oy),
+           b2 = vf_sub(vf_set1(tri->v1[2]), r->oz);
+    vfloat c0 = vf_sub(vf_set1(tri->v2[0]), r->ox), c1 = vf_sub(vf_set1(tri->v2[1]), r->oy),
+           c2 = vf_sub(vf_set1(tri->v2[2]), r->oz);
+    return watertight_core(pick3(x0, x1, a0, a1, a2), pick3(y0, y1, a0, a1, a2),
+                           pick3(z0, z1, a0, a1, a2), pick3(x0, x1, b0, b1, b2),
+                           pick3(y0, y1, b0, b1, b2), pick3(z0, z1, b0, b1, b2),
+                           pick3(x0, x1, c0, c1, c2), pick3(y0, y1, c0, c1, c2),
+                           pick3(z0, z1, c0, c1, c2), sx, sy, sz, r->tnear, r->tfar, r->live,
+                           want_uv);
+}
+
+LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
+                                  const lanes_triangle *tri, bool want_uv)
+{
+    if (algo == LANES_TRI_WATERTIGHT) return watertight_packet_core(r, tri, want_uv);
+    return moller_core(r->ox, r->oy, r->oz, r->dx, r->dy, r->dz, vf_set1(tri->v0[0]),
+                       vf_set1(tri->v0[1]), vf_set1(tri->v0[2]), vf_set1(tri->v1[0]),
+                       vf_set1(tri->v1[1]), vf_set1(tri->v1[2]), vf_set1(tri->v2[0]),
+                       vf_set1(tri->v2[1]), vf_set1(tri->v2[2]), r->tnear, r->tfar, r->live,
+                       want_uv);
+}
+
+/* One ray against the triangles i .. i+LANES_W-1. Unaligned loads: a BVH
+ * leaf's triangles start anywhere in the leaf-ordered arrays. */
+typedef struct {
+    const float *v[3][3]; /* [vertex][axis], axes permuted for the watertight test */
+    vfloat ox, oy, oz, dx, dy, dz, sx, sy, sz, tnear, tfar;
+} wide_setup;
+
+static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ray,
+                                        const lanes_triangles *t)
+{
+    wide_setup w;
+    const float *axes[3][3] = {{t->v0x, t->v0y, t->v0z}, {t->v1x, t->v1y, t->v1z},
+                               {t->v2x, t->v2y, t->v2z}};
+    int order[3] = {0, 1, 2};
+    float o[3] = {ray->o[0], ray->o[1], ray->o[2]};
+    float sx = 0.0f, sy = 0.0f, sz = 0.0f;
+    if (algo == LANES_TRI_WATERTIGHT) {
+        wt_setup s = wt_setup_ray(ray->d);
+        order[0] = s.kx, order[1] = s.ky, order[2] = s.kz;
+        sx = s.sx, sy = s.sy, sz = s.sz;
+        o[0] = ray->o[s.kx], o[1] = ray->o[s.ky], o[2] = ray->o[s.kz];
+    }
+    for (int vtx = 0; vtx < 3; vtx++)
+        for (int a = 0; a < 3; a++) w.v[vtx][a] = axes[vtx][order[a]];
+    w.ox = vf_set1(o[0]), w.oy = vf_set1(o[1]), w.oz = vf_set1(o[2]);
+    w.dx = vf_set1(ray->d[0]), w.dy = vf_set1(ray->d[1]), w.dz = vf_set1(ray->d[2]);
+    w.sx = vf_set1(sx), w.sy = vf_set1(sy), w.sz = vf_set1(sz);
+    w.tnear = vf_set1(ray->tnear), w.tfar = vf_set1(ray->tfar);
+    return w;
+}
+
+LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size_t i, vfloat tfar,
+                                  vmask live, bool want_uv)
+{
+    if (algo == LANES_TRI_WATERTIGHT)
+        return watertight_core(
+            vf_sub(vf_loadu(w->v[0][0] + i), w->ox), vf_sub(vf_loadu(w->v[0][1] + i), w->oy),
+            vf_sub(vf_loadu(w->v[0][2] + i), w->oz), vf_sub(vf_loadu(w->v[1][0] + i), w->ox),
+            vf_sub(vf_loadu(w->v[1][1] + i), w->oy), vf_sub(vf_loadu(w->v[1][2] + i), w->oz),
+            vf_sub(vf_loadu(w->v[2][0] + i), w->ox), vf_sub(vf_loadu(w->v[2][1] + i), w->oy),
+            vf_sub(vf_loadu(w->v[2][2] + i), w->oz), w->sx, w->sy, w->sz, w->tnear, tfar, live,
+            want_uv);
+    return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, vf_loadu(w->v[0][0] + i),
+                       vf_loadu(w->v[0][1] + i), vf_loadu(w->v[0][2] + i), vf_loadu(w->v[1][0] + i),
+                       vf_loadu(w->v[1][1] + i), vf_loadu(w->v[1][2] + i), vf_loadu(w->v[2][0] + i),
+                       vf_loadu(w->v[2][1] + i), vf_loadu(w->v[2][2] + i), w->tnear, tfar, live,
+                       want_uv);
+}
+
+/* Closest hit: the ray's tfar shrinks to the best t so far, so later
+ * vectors only report nearer (or equally near) hits; ties keep the lowest
+ * index because a later vector must be strictly nearer to win. */
+LANES_BODY long tri_closest_body(lanes_tri_algo algo, const lanes_ray *ray,
+                                 const lanes_triangles *tris, size_t n, float *t, float *u,
+                                 float *v, lanes_lane_stats *stats)
+{
+    wide_setup w = wide_setup_ray(algo, ray, tris);
+    vfloat tfar = w.tfar;
+    float best_t = ray->tfar, best_u = 0.0f, best_v = 0.0f;
+    long best = -1;
+    for (size_t i = 0; i < n; i += LANES_W) {
+        vmask live = vm_first_n(n - i);
+        tri_result h = ray_vs_tris(algo, &w, i, tfar, live, true);
+        LANES_COUNT(stats, live);
+        if (vm_none(h.hit)) continue;
+        float tmin = vf_reduce_min(vf_select(h.hit, h.t, vf_set1(INFINITY)));
+        if (best >= 0 && !(tmin < best_t)) continue;
+        uint32_t at = vm_bits(vm_and(h.hit, vf_eq(h.t, vf_set1(tmin))));
+        int lane = __builtin_ctz(at);
+        best = (long)(i + (size_t)lane);
+        best_t = tmin;
+        best_u = vf_lane(h.u, lane);
+        best_v = vf_lane(h.v, lane);
+        tfar = vf_set1(best_t);
+    }
+    if (best >= 0) {
+        *t = best_t;
+        *u = best_u;
+        *v = best_v;
+    }
+    return best;
+}
+
+LANES_BODY bool tri_any_body(lanes_tri_algo algo, const lanes_ray *ray, const lanes_triangles *tris,
+                             size_t n, lanes_lane_stats *stats)
+{
+    wide_setup w = wide_setup_ray(algo, ray, tris);
+    for (size_t i = 0; i < n; i += LANES_W) {
+        vmask live = vm_first_n(n - i);
+        tri_result h = ray_vs_tris(algo, &w, i, w.tfar, live, false);
+        LANES_COUNT(stats, live);
+        if (vm_any(h.hit)) return true;
+    }
+    return false;
+}
+
+#endif
