@@ -1,0 +1,80 @@
+// Image files through OpenImageIO (see image_io.h).
+#include "bench/image_io.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace {
+
+void set_error(char *error, size_t size, const std::string &text)
+{
+    if (error && size) std::snprintf(error, size, "%s", text.c_str());
+}
+
+float srgb_encode(float x)
+{
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= 1.0f) return 1.0f;
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+bool holds_floats(const std::string &format)
+{
+    return format == "openexr" || format == "hdr" || format == "tiff" || format == "fits";
+}
+
+} // namespace
+
+extern "C" bool lanes_image_write(const char *path, int width, int height, const float *rgb,
+                                  char *error, size_t error_size)
+{
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) {
+        set_error(error, error_size,
+                  std::string(path) + ": cannot write this image format: " + OIIO::geterror());
+        return false;
+    }
+    bool linear = holds_floats(out->format_name());
+    OIIO::ImageSpec spec(width, height, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    if (!linear) spec.attribute("oiio:ColorSpace", "sRGB");
+    std::vector<float> pixels(rgb, rgb + static_cast<size_t>(width) * static_cast<size_t>(height) * 3);
+    if (!linear)
+        for (float &v : pixels) v = srgb_encode(v);
+    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
+        !out->close()) {
+        set_error(error, error_size, std::string(path) + ": " + out->geterror());
+        return false;
+    }
+    return true;
+}
+
+extern "C" bool lanes_image_compare(const char *path_a, const char *path_b, double threshold,
+                                    lanes_image_diff *diff, char *error, size_t error_size)
+{
+    OIIO::ImageBuf a(path_a), b(path_b);
+    if (!a.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
+        set_error(error, error_size, std::string(path_a) + ": " + a.geterror());
+        return false;
+    }
+    if (!b.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
+        set_error(error, error_size, std::string(path_b) + ": " + b.geterror());
+        return false;
+    }
+    if (a.spec().width != b.spec().width || a.spec().height != b.spec().height ||
+        a.spec().nchannels != b.spec().nchannels) {
+        set_error(error, error_size, std::string("images differ in size: ") + path_a + " and " + path_b);
+        return false;
+    }
+    auto r = OIIO::ImageBufAlgo::compare(a, b, static_cast<float>(threshold), static_cast<float>(threshold));
+    diff->mean_error = r.meanerror;
+    diff->max_error = r.maxerror;
+    diff->pixels_over = static_cast<long long>(r.nfail);
+    diff->pixels = static_cast<long long>(a.spec().width) * a.spec().height;
+    return true;
+}

@@ -1,0 +1,66 @@
+/* The Whitted renderer: primary rays, shadow rays to point lights and to
+ * sampled area lights, and mirror reflection and refraction up to a bounce
+ * limit (the thesis' test set-up, Wu 2016 3.2). It traces through the
+ * kernel table of one instruction set and one traversal scheme.
+ *
+ * Compiled for the x86-64 baseline: all per-ray work happens in the kernels. */
+#ifndef LANES_TRACE_RENDER_H
+#define LANES_TRACE_RENDER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "build/bvh.h"
+#include "build/scene.h"
+#include "trace/kernels.h"
+
+typedef enum lanes_scheme {
+    LANES_SCHEME_SINGLE = 0, /* single ray through the BVH2 */
+    LANES_SCHEME_WIDE,       /* single ray through the wide BVH of the set's width */
+    LANES_SCHEME_COUNT
+} lanes_scheme;
+
+const char *lanes_scheme_name(lanes_scheme s);
+/* -1 for an unknown name */
+int lanes_scheme_from_name(const char *name);
+
+typedef struct lanes_render_options {
+    lanes_isa isa;
+    lanes_scheme scheme;
+    lanes_tri_algo algo;
+    int width, height;
+    int spp;             /* samples per pixel, stratified */
+    int threads;         /* 0: all cores */
+    int max_depth;       /* specular bounces, default 10 */
+    int area_samples;    /* shadow rays per area light per hit, default 4 */
+    /* Called from worker threads with the fraction done; may be NULL. */
+    void (*progress)(void *ctx, double fraction);
+    void *progress_ctx;
+} lanes_render_options;
+
+void lanes_render_default_options(lanes_render_options *o);
+
+typedef struct lanes_render_result {
+    float *rgb;             /* width * height * 3, linear radiance */
+    int width, height;
+    double seconds;         /* wall time of the trace */
+    uint64_t rays;          /* every ray traced: camera, shadow, secondary */
+    uint64_t camera_rays, shadow_rays, secondary_rays;
+} lanes_render_result;
+
+/* The acceleration structures a render needs: the BVH2 and, for the wide
+ * scheme, the wide BVH of the chosen set's width. */
+typedef struct lanes_accel {
+    lanes_bvh2 bvh2;
+    lanes_wbvh wide;        /* width == the set's wide_width, or 0 when not built */
+} lanes_accel;
+
+bool lanes_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_accel *a,
+                       lanes_error *err);
+void lanes_accel_free(lanes_accel *a);
+
+bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
+                  const lanes_render_options *opt, lanes_render_result *out, lanes_error *err);
+void lanes_render_result_free(lanes_render_result *r);
+
+#endif
