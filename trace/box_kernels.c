@@ -10,36 +10,8 @@
  *   running interval is always passed second, so a NaN slab distance leaves
  *   the interval as it was: a ray in the plane of a face counts as inside
  *   (boxes are closed). */
-#include "trace/kernel_common.h"
+#include "trace/box_core.h"
 #include "trace/kernel_decls.h"
-
-/* The entry and exit of rays against one box, SIMD across rays. */
-LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *entry)
-{
-    vfloat t1, t2, tin = r->tnear, tout = r->tfar;
-    vmask neg;
-
-    t1 = vf_mul(vf_sub(vf_set1(b->min[0]), r->ox), r->rdx);
-    t2 = vf_mul(vf_sub(vf_set1(b->max[0]), r->ox), r->rdx);
-    neg = vf_lt(r->rdx, vf_zero());
-    tin = vf_max(vf_select(neg, t2, t1), tin);
-    tout = vf_min(vf_select(neg, t1, t2), tout);
-
-    t1 = vf_mul(vf_sub(vf_set1(b->min[1]), r->oy), r->rdy);
-    t2 = vf_mul(vf_sub(vf_set1(b->max[1]), r->oy), r->rdy);
-    neg = vf_lt(r->rdy, vf_zero());
-    tin = vf_max(vf_select(neg, t2, t1), tin);
-    tout = vf_min(vf_select(neg, t1, t2), tout);
-
-    t1 = vf_mul(vf_sub(vf_set1(b->min[2]), r->oz), r->rdz);
-    t2 = vf_mul(vf_sub(vf_set1(b->max[2]), r->oz), r->rdz);
-    neg = vf_lt(r->rdz, vf_zero());
-    tin = vf_max(vf_select(neg, t2, t1), tin);
-    tout = vf_min(vf_select(neg, t1, t2), tout);
-
-    *entry = tin;
-    return vm_and(vf_le(tin, tout), r->live);
-}
 
 LANES_BODY size_t box_packet_body(const lanes_rays *rays, const uint32_t *idx, size_t n,
                                   const lanes_box *box, uint32_t *hit, float *tentry,

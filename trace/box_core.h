@@ -1,0 +1,37 @@
+/* The slab test of rays against one box, shared by the box kernels and the
+ * packet traversal of one kernel set (see box_kernels.c for its edge
+ * cases). Included only by per-ISA files; static inline. */
+#ifndef LANES_TRACE_BOX_CORE_H
+#define LANES_TRACE_BOX_CORE_H
+
+#include "trace/kernel_common.h"
+
+/* The entry and exit of rays against one box, SIMD across rays. */
+LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *entry)
+{
+    vfloat t1, t2, tin = r->tnear, tout = r->tfar;
+    vmask neg;
+
+    t1 = vf_mul(vf_sub(vf_set1(b->min[0]), r->ox), r->rdx);
+    t2 = vf_mul(vf_sub(vf_set1(b->max[0]), r->ox), r->rdx);
+    neg = vf_lt(r->rdx, vf_zero());
+    tin = vf_max(vf_select(neg, t2, t1), tin);
+    tout = vf_min(vf_select(neg, t1, t2), tout);
+
+    t1 = vf_mul(vf_sub(vf_set1(b->min[1]), r->oy), r->rdy);
+    t2 = vf_mul(vf_sub(vf_set1(b->max[1]), r->oy), r->rdy);
+    neg = vf_lt(r->rdy, vf_zero());
+    tin = vf_max(vf_select(neg, t2, t1), tin);
+    tout = vf_min(vf_select(neg, t1, t2), tout);
+
+    t1 = vf_mul(vf_sub(vf_set1(b->min[2]), r->oz), r->rdz);
+    t2 = vf_mul(vf_sub(vf_set1(b->max[2]), r->oz), r->rdz);
+    neg = vf_lt(r->rdz, vf_zero());
+    tin = vf_max(vf_select(neg, t2, t1), tin);
+    tout = vf_min(vf_select(neg, t1, t2), tout);
+
+    *entry = tin;
+    return vm_and(vf_le(tin, tout), r->live);
+}
+
+#endif
