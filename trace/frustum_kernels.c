@@ -166,9 +166,9 @@ LANES_BODY size_t frustum_tris_body(const lanes_frustum *f, const lanes_triangle
         if (f->empty) {
             m = vm_false();
         } else if (f->valid) {
-            vfloat v0[3] = {vf_load(t->v0x + i), vf_load(t->v0y + i), vf_load(t->v0z + i)};
-            vfloat v1[3] = {vf_load(t->v1x + i), vf_load(t->v1y + i), vf_load(t->v1z + i)};
-            vfloat v2[3] = {vf_load(t->v2x + i), vf_load(t->v2y + i), vf_load(t->v2z + i)};
+            vfloat v0[3] = {vf_loadu(t->v0x + i), vf_loadu(t->v0y + i), vf_loadu(t->v0z + i)};
+            vfloat v1[3] = {vf_loadu(t->v1x + i), vf_loadu(t->v1y + i), vf_loadu(t->v1z + i)};
+            vfloat v2[3] = {vf_loadu(t->v2x + i), vf_loadu(t->v2y + i), vf_loadu(t->v2z + i)};
             if (method & LANES_CULL_INTERVAL) m = vm_and(m, tris_interval(f, v0, v1, v2));
             if ((method & LANES_CULL_PLANES) && f->has_planes) {
                 const vfloat *const v[3] = {v0, v1, v2};

@@ -61,5 +61,8 @@ void LANES_FN(lanes_trace_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo,
 void LANES_FN(lanes_occluded_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo,
                                    const lanes_ray *rays, size_t n, uint8_t *occluded,
                                    lanes_trace_stats *stats);
+void LANES_FN(lanes_trace_packet)(const struct lanes_bvh2 *b, const lanes_packet_options *opt,
+                                  lanes_rays *rays, uint32_t *prim, float *u, float *v,
+                                  uint8_t *occluded, lanes_packet_stats *stats);
 
 #endif

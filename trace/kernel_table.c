@@ -27,4 +27,5 @@ const lanes_kernels LANES_FN(lanes_kernels) = {
     .occluded_wide = LANES_FN(lanes_occluded_wide),
     .trace_bvh2 = LANES_FN(lanes_trace_bvh2),
     .occluded_bvh2 = LANES_FN(lanes_occluded_bvh2),
+    .trace_packet = LANES_FN(lanes_trace_packet),
 };

@@ -157,6 +157,45 @@ typedef struct lanes_trace_stats {
 struct lanes_bvh2;
 struct lanes_wbvh;
 
+/* Packet traversal (Wu 2016 ch. 3; Overbeck et al. 2008): a packet of up to
+ * LANES_PACKET_MAX_RAYS rays traverses the BVH2 together, SIMD across its
+ * rays. The rays are taken LANES_W at a time as fixed ray groups (rays
+ * g*W .. g*W+W-1 of the packet: 2x2, 2x4 or 4x4 pixel tiles when the packet
+ * builder lays primary rays out that way). */
+#define LANES_PACKET_MAX_RAYS 1024
+
+typedef enum lanes_packet_scheme {
+    /* Partition traversal: at each node the groups with a live ray are moved
+     * to the front of an index list, and only those go on. */
+    LANES_PACKET_PARTITION = 0,
+    /* Ranged (first/last active) traversal: the groups between the first
+     * and the last one that hits go on, in their fixed order. */
+    LANES_PACKET_RANGED = 1,
+    LANES_PACKET_SCHEME_COUNT
+} lanes_packet_scheme;
+
+/* Options of one packet trace. */
+typedef struct lanes_packet_options {
+    lanes_packet_scheme scheme;
+    lanes_tri_algo algo;
+    const lanes_frustum *frustum; /* the packet's frustum: nodes outside it are skipped; may be NULL */
+    bool corner_test;   /* all four corner rays hit a node => all live rays do (before any elimination) */
+    bool leaf_frustum;  /* rebuild a frustum from the live rays at each leaf and cull its triangles */
+    bool occlusion;     /* any-hit: a ray stops at its first hit */
+} lanes_packet_options;
+
+/* Counts for the utilisation metrics. Box and triangle "ops" are the
+ * SIMD ray-group tests; their lanes count the live rays (Wu Def. 4.2.1;
+ * the packet utilisation of Def. 4.2.2 is active_lanes / lane_slots). */
+typedef struct lanes_packet_stats {
+    uint64_t packets, rays;
+    uint64_t nodes_visited, leaves_visited; /* nodes reached with live rays */
+    uint64_t node_live_rays, leaf_live_rays; /* sums, for the average live rays per visited node and leaf */
+    uint64_t frustum_culled, corner_all_hit;
+    uint64_t triangles_culled, triangles_tested;
+    lanes_lane_stats box_ops, tri_ops;
+} lanes_packet_stats;
+
 /* The kernels of one instruction set. Every entry is filled. */
 typedef struct lanes_kernels {
     lanes_isa isa;
@@ -239,6 +278,16 @@ typedef struct lanes_kernels {
                        size_t n, lanes_hit *hits, lanes_trace_stats *stats);
     void (*occluded_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
                           size_t n, uint8_t *occluded, lanes_trace_stats *stats);
+
+    /* One packet of rays->count (<= LANES_PACKET_MAX_RAYS) prepared rays
+     * through the BVH2. Closest hit: each ray's tfar shrinks to its hit
+     * distance, and prim[i], u[i], v[i] are written for rays that hit
+     * (prim must be LANES_NO_HIT on entry). Occlusion: occluded[i] is set to
+     * 1 for rays that hit anything (and their tfar to -inf); u, v, prim may
+     * be NULL. */
+    void (*trace_packet)(const struct lanes_bvh2 *b, const lanes_packet_options *opt,
+                         lanes_rays *rays, uint32_t *prim, float *u, float *v, uint8_t *occluded,
+                         lanes_packet_stats *stats);
 } lanes_kernels;
 
 /* The table of the active set (lanes_isa_current()). */
