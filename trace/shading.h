@@ -77,11 +77,13 @@ static inline lanes_surface lanes_surface_at(const lanes_scene *s, const lanes_h
     return sf;
 }
 
-/* A shadow ray and what it adds when unoccluded. */
+/* A shadow ray and what it adds when unoccluded. light: the point light's
+ * index, or point_light_count + the area light's index. */
 typedef struct {
     vec3 o, d;
     float tfar;
     vec3 add;
+    uint32_t light;
 } lanes_shadow_ray;
 
 /* The light a diffuse surface receives: `ambient` always, each shadow ray's
@@ -103,7 +105,7 @@ static inline int lanes_diffuse_light(const lanes_scene *s, const lanes_surface 
         float cosine = v3_dot(sf->nf, l);
         if (cosine <= 0.0f) continue;
         vec3 in = v3_scale(v3_load(s->point_lights[i].intensity), cosine / (dist2 * LANES_PI));
-        out[n++] = (lanes_shadow_ray){origin, l, dist * (1.0f - 1e-4f), v3_mul(albedo, in)};
+        out[n++] = (lanes_shadow_ray){origin, l, dist * (1.0f - 1e-4f), v3_mul(albedo, in), (uint32_t)i};
     }
     for (size_t i = 0; i < s->area_light_count && area_samples > 0; i++) {
         const lanes_area_light *al = &s->area_lights[i];
@@ -124,7 +126,8 @@ static inline int lanes_diffuse_light(const lanes_scene *s, const lanes_surface 
             if (cos_p <= 0.0f || cos_l <= 0.0f) continue;
             float g = cos_p * cos_l * area / (dist2 * LANES_PI * (float)area_samples);
             out[n++] = (lanes_shadow_ray){origin, l, dist * (1.0f - 1e-4f),
-                                          v3_mul(albedo, v3_scale(v3_load(al->emission), g))};
+                                          v3_mul(albedo, v3_scale(v3_load(al->emission), g)),
+                                          (uint32_t)(s->point_light_count + i)};
         }
     }
     return n;
