@@ -129,6 +129,7 @@ typedef struct {
     size_t keys_cap;
     lanes_packet_metrics m;
     uint64_t camera_rays, shadow_rays, secondary_rays;
+    uint64_t by_depth[LANES_MAX_DEPTH + 1];
     bool failed;
     size_t first_quad, end_quad;
 } worker_t;
@@ -394,6 +395,7 @@ static void trace_specular(worker_t *w, int depth)
         }
         w->pk.count = end - start;
         trace_filled_packet(w, LANES_RAYS_SPECULAR, false);
+        w->by_depth[depth] += end - start;
         for (size_t i = 0; i < end - start; i++) {
             w->secondary_rays++;
             shade_hit(w, &batch[i], &w->hits[i], depth);
@@ -559,10 +561,12 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
     job.width = opt->base.width > 0 ? opt->base.width : scene->camera.width;
     job.height = opt->base.height > 0 ? opt->base.height : scene->camera.height;
     if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
-        opt->base.spp < 1 || opt->base.spp > 65536) {
+        opt->base.spp < 1 || opt->base.spp > 65536 || opt->base.max_depth < 0 ||
+        opt->base.max_depth > LANES_MAX_DEPTH) {
         snprintf(err->message, sizeof err->message,
-                 "render: image size %dx%d or %d samples per pixel out of range (1..16384, 1..65536)",
-                 job.width, job.height, opt->base.spp);
+                 "render: image size %dx%d, %d samples per pixel or depth %d out of range "
+                 "(1..16384, 1..65536, 0..%d)",
+                 job.width, job.height, opt->base.spp, opt->base.max_depth, LANES_MAX_DEPTH);
         return false;
     }
     if (accel->bvh2.node_count == 0) {
@@ -638,6 +642,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
         out->camera_rays += w->camera_rays;
         out->shadow_rays += w->shadow_rays;
         out->secondary_rays += w->secondary_rays;
+        for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += w->by_depth[d];
         if (metrics) {
             for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
                 metrics->rays[t] += w->m.rays[t];

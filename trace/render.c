@@ -78,6 +78,7 @@ typedef struct {
 
 typedef struct {
     uint64_t camera, shadow, secondary;
+    uint64_t by_depth[LANES_MAX_DEPTH + 1];
 } ray_counts;
 
 static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float tfar)
@@ -132,6 +133,7 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
         vec3 sum = v3(0, 0, 0);
         for (int i = 0; i < n; i++) {
             count->secondary++;
+            count->by_depth[depth + 1]++;
             sum = v3_add(sum, shade(job, b[i].o, b[i].d, b[i].weight, depth + 1, b[i].seed, shadow, count));
         }
         return sum;
@@ -227,10 +229,11 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
     job.width = opt->width > 0 ? opt->width : scene->camera.width;
     job.height = opt->height > 0 ? opt->height : scene->camera.height;
     if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
-        opt->spp < 1 || opt->spp > 65536) {
+        opt->spp < 1 || opt->spp > 65536 || opt->max_depth < 0 || opt->max_depth > LANES_MAX_DEPTH) {
         snprintf(err->message, sizeof err->message,
-                 "render: image size %dx%d or %d samples per pixel out of range (1..16384, 1..65536)",
-                 job.width, job.height, opt->spp);
+                 "render: image size %dx%d, %d samples per pixel or depth %d out of range "
+                 "(1..16384, 1..65536, 0..%d)",
+                 job.width, job.height, opt->spp, opt->max_depth, LANES_MAX_DEPTH);
         return false;
     }
     job.eps = lanes_scene_epsilon(scene);
@@ -259,7 +262,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
     int started = 0;
     size_t shadow_room = (size_t)lanes_max_shadow_rays(scene, opt->area_samples) + 1;
     for (int i = 0; i < threads; i++) {
-        args[i] = (worker_arg){&job, {0, 0, 0}, calloc(shadow_room, sizeof(lanes_shadow_ray))};
+        args[i] = (worker_arg){&job, {0}, calloc(shadow_room, sizeof(lanes_shadow_ray))};
         if (!args[i].shadow) break;
         if (i > 0 && pthread_create(&tid[i], NULL, worker, &args[i]) != 0) {
             free(args[i].shadow);
@@ -283,6 +286,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
         out->camera_rays += args[i].count.camera;
         out->shadow_rays += args[i].count.shadow;
         out->secondary_rays += args[i].count.secondary;
+        for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += args[i].count.by_depth[d];
     }
     out->rays = out->camera_rays + out->shadow_rays + out->secondary_rays;
     out->rgb = job.rgb;

@@ -24,6 +24,8 @@ const char *lanes_scheme_name(lanes_scheme s);
 /* -1 for an unknown name */
 int lanes_scheme_from_name(const char *name);
 
+#define LANES_MAX_DEPTH 32
+
 typedef struct lanes_render_options {
     lanes_isa isa;
     lanes_scheme scheme;
@@ -31,7 +33,7 @@ typedef struct lanes_render_options {
     int width, height;
     int spp;             /* samples per pixel, stratified */
     int threads;         /* 0: all cores */
-    int max_depth;       /* specular bounces, default 10 */
+    int max_depth;       /* specular bounces, default 10, at most LANES_MAX_DEPTH */
     int area_samples;    /* shadow rays per area light per hit, default 4 */
     /* Called from worker threads with the fraction done; may be NULL. */
     void (*progress)(void *ctx, double fraction);
@@ -46,6 +48,7 @@ typedef struct lanes_render_result {
     double seconds;         /* wall time of the trace */
     uint64_t rays;          /* every ray traced: camera, shadow, secondary */
     uint64_t camera_rays, shadow_rays, secondary_rays;
+    uint64_t secondary_by_depth[LANES_MAX_DEPTH + 1]; /* reflection/refraction rays of each bounce */
 } lanes_render_result;
 
 /* The acceleration structures a render needs: the BVH2 and, for the wide
