@@ -178,8 +178,15 @@ static void trace_filled_packet(worker_t *w, lanes_ray_type type, bool occlusion
         w->prim[i] = LANES_NO_HIT;
         w->occluded[i] = 0;
     }
-    job->k->trace_packet(&job->accel->bvh2, &po, &w->pk, w->prim, w->u, w->v, w->occluded,
-                         opt->count ? &w->m.stats[type] : NULL);
+    lanes_packet_stats *st = opt->count ? &w->m.stats[type] : NULL;
+    uint64_t slots0 = st ? st->box_ops.lane_slots + st->tri_ops.lane_slots : 0;
+    uint64_t live0 = st ? st->box_ops.active_lanes + st->tri_ops.active_lanes : 0;
+    job->k->trace_packet(&job->accel->bvh2, &po, &w->pk, w->prim, w->u, w->v, w->occluded, st);
+    if (st) {
+        uint64_t slots = st->box_ops.lane_slots + st->tri_ops.lane_slots - slots0;
+        uint64_t live = st->box_ops.active_lanes + st->tri_ops.active_lanes - live0;
+        if (slots) w->m.packet_util_sum[type] += (double)live / (double)slots;
+    }
     w->m.packets[type]++;
     w->m.rays[type] += n;
     w->m.packets_of_size[type][n]++;
@@ -647,6 +654,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
             for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
                 metrics->rays[t] += w->m.rays[t];
                 metrics->packets[t] += w->m.packets[t];
+                metrics->packet_util_sum[t] += w->m.packet_util_sum[t];
                 for (int k = 0; k <= LANES_PACKET_MAX_RAYS; k++)
                     metrics->packets_of_size[t][k] += w->m.packets_of_size[t][k];
                 lanes_packet_stats *a = &metrics->stats[t];

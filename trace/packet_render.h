@@ -53,6 +53,9 @@ typedef struct lanes_packet_metrics {
     /* packets_of_size[t][k]: packets of ray type t holding k rays */
     uint64_t packets_of_size[LANES_RAY_TYPE_COUNT][LANES_PACKET_MAX_RAYS + 1];
     lanes_packet_stats stats[LANES_RAY_TYPE_COUNT]; /* only with options.count */
+    /* Wu Def. 4.2.2 per packet, summed over the packets (only with
+     * options.count): the mean packet utilisation is the sum / packets. */
+    double packet_util_sum[LANES_RAY_TYPE_COUNT];
     uint64_t queue_nodes;          /* queued tracing: number of queue nodes */
 } lanes_packet_metrics;
 

@@ -1,0 +1,164 @@
+/* `lanes render`: one image of a scene through any traversal scheme, written
+ * by OpenImageIO, with the rays per second it took. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bench/cli_commands.h"
+#include "bench/cli_common.h"
+#include "bench/image_io.h"
+#include "build/scene_load.h"
+#include "trace/packet_render.h"
+#include "trace/render.h"
+
+typedef struct {
+    bool tty;
+    int last;
+} progress_bar;
+
+/* Redrawn only when the shown percentage changes, and only on a terminal. */
+static void show_progress(void *ctx, double fraction)
+{
+    progress_bar *p = ctx;
+    int pct = (int)(fraction * 100.0);
+    if (!p->tty || pct == p->last) return;
+    p->last = pct;
+    int filled = pct * 40 / 100;
+    fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################", 40 - filled, "", pct);
+    if (pct == 100) fprintf(stderr, "\n");
+    fflush(stderr);
+}
+
+static int render_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
+{
+    const char *scene_spec = NULL, *out_path = NULL, *value;
+    const char *scheme_name = "wide", *queue_name = "MAX", *algo_name = "moller";
+    lanes_packet_render_options po;
+    lanes_packet_render_default_options(&po);
+    bool no_frustum = false;
+
+    cli_args a = cli_args_begin(ctx, self, argc, argv);
+    while (cli_args_next(&a)) {
+        if (cli_value(&a, "-o", &out_path) || cli_value(&a, "--output", &out_path)) {
+        } else if (cli_value(&a, "--scheme", &scheme_name)) {
+        } else if (cli_value(&a, "--queue", &queue_name)) {
+        } else if (cli_value(&a, "--algo", &algo_name)) {
+        } else if (cli_value(&a, "--queue-min", &value)) {
+            po.queue_min = (int)cli_parse_count(&a, "--queue-min", value, 1, 1u << 30);
+        } else if (cli_value(&a, "--packet", &value)) {
+            po.packet_size = (int)cli_parse_count(&a, "--packet", value, 1, LANES_PACKET_MAX_RAYS);
+        } else if (cli_value(&a, "--spp", &value)) {
+            po.base.spp = (int)cli_parse_count(&a, "--spp", value, 1, 65536);
+        } else if (cli_value(&a, "--threads", &value)) {
+            po.base.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
+        } else if (cli_value(&a, "--depth", &value)) {
+            po.base.max_depth = (int)cli_parse_count(&a, "--depth", value, 0, LANES_MAX_DEPTH);
+        } else if (cli_value(&a, "--size", &value)) {
+            int w = 0, h = 0;
+            char tail;
+            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
+                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..16384, not '%s'", value);
+            po.base.width = w;
+            po.base.height = h;
+        } else if (cli_flag(&a, "--no-frustum")) {
+            no_frustum = true;
+        } else if (cli_global_option(&a)) {
+        } else if (a.argv[a.i][0] != '-' && !scene_spec) {
+            scene_spec = a.argv[a.i];
+        } else {
+            cli_unknown_option(&a);
+        }
+    }
+    if (!out_path) cli_usage_error(ctx, self, "no output file: give -o FILE (PNG, EXR, ...)");
+
+    bool packets = strcmp(scheme_name, "packet") == 0 || strcmp(scheme_name, "ranged") == 0;
+    int single_scheme = lanes_scheme_from_name(scheme_name);
+    if (!packets && single_scheme < 0)
+        cli_usage_error(ctx, self, "unknown scheme '%s' (single, wide, packet, ranged)", scheme_name);
+    int queue = lanes_queue_from_name(queue_name);
+    if (queue < 0) cli_usage_error(ctx, self, "unknown queue heuristic '%s' (MAX, CORNER, none)", queue_name);
+    if (strcmp(algo_name, "moller") == 0)
+        po.base.algo = LANES_TRI_MOLLER;
+    else if (strcmp(algo_name, "watertight") == 0)
+        po.base.algo = LANES_TRI_WATERTIGHT;
+    else
+        cli_usage_error(ctx, self, "unknown triangle test '%s' (moller, watertight)", algo_name);
+    po.queue = (lanes_queue_heuristic)queue;
+    po.scheme = strcmp(scheme_name, "ranged") == 0 ? LANES_PACKET_RANGED : LANES_PACKET_PARTITION;
+    if (no_frustum) po.frustum = po.corner_test = po.leaf_frustum = false;
+    po.base.isa = lanes_isa_current();
+    const lanes_kernels *k = lanes_kernels_for(po.base.isa);
+    if (packets && po.packet_size < k->lanes)
+        cli_usage_error(ctx, self, "--packet %d is smaller than one %d-lane group", po.packet_size, k->lanes);
+
+    lanes_scene scene;
+    lanes_error err;
+    if (!lanes_scene_load(scene_spec, &scene, &err)) cli_fail("%s", err.message);
+    lanes_accel accel;
+    uint64_t t0 = cli_now_ns();
+    if (!lanes_accel_build(&scene, packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
+                           po.base.threads, &accel, &err)) {
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
+    double build_s = (double)(cli_now_ns() - t0) * 1e-9;
+
+    progress_bar bar = {isatty(2) != 0, -1};
+    po.base.progress = show_progress;
+    po.base.progress_ctx = &bar;
+    lanes_render_result r;
+    bool ok;
+    if (packets) {
+        ok = lanes_packet_render(&scene, &accel, &po, &r, NULL, &err);
+    } else {
+        po.base.scheme = (lanes_scheme)single_scheme;
+        ok = lanes_render(&scene, &accel, &po.base, &r, &err);
+    }
+    if (!ok) {
+        lanes_accel_free(&accel);
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
+    char msg[512];
+    if (!lanes_image_write(out_path, r.width, r.height, r.rgb, msg, sizeof msg)) {
+        lanes_render_result_free(&r);
+        lanes_accel_free(&accel);
+        lanes_scene_free(&scene);
+        cli_fail("%s", msg);
+    }
+    printf("%s: %zu triangles, BVH built in %.3f s\n", scene.name, scene.triangle_count, build_s);
+    printf("rendered %dx%d, %d spp, scheme %s", r.width, r.height, po.base.spp, scheme_name);
+    if (packets) printf(" (packets of %d, queue %s, queue size %d)", po.packet_size, lanes_queue_name(po.queue), po.queue_min);
+    printf(", isa %s (%d lanes), %s triangles\n", k->name, k->lanes, algo_name);
+    printf("rays: %llu camera, %llu shadow, %llu reflected/refracted; %.3f s; %.2f Mrays/s\n",
+           (unsigned long long)r.camera_rays, (unsigned long long)r.shadow_rays,
+           (unsigned long long)r.secondary_rays, r.seconds,
+           r.seconds > 0 ? (double)r.rays / r.seconds * 1e-6 : 0.0);
+    printf("wrote %s\n", out_path);
+    lanes_render_result_free(&r);
+    lanes_accel_free(&accel);
+    lanes_scene_free(&scene);
+    return 0;
+}
+
+const cli_command cli_cmd_render = {
+    .name = "render",
+    .summary = "render a scene to an image file",
+    .usage = "usage: lanes render [SCENE] -o FILE [options]\n"
+             "SCENE: a built-in scene name, a scene file (.json) or a mesh file; default: the\n"
+             "embedded default scene\n"
+             "  -o, --output FILE     image to write (PNG, EXR, ... as OpenImageIO knows them)\n"
+             "  --scheme S            single (BVH2), wide (wide BVH, default), packet, ranged\n"
+             "  --queue Q             specular packets: MAX (default), CORNER, none (global division)\n"
+             "  --queue-min N         queue nodes hold at least N triangles (default 1024)\n"
+             "  --packet N            rays per packet, at most 1024 (default 1024)\n"
+             "  --no-frustum          packets without frustum culling\n"
+             "  --algo A              triangle test: moller (default), watertight\n"
+             "  --spp N               samples per pixel (default 1)\n"
+             "  --size WxH            image size (default: the scene camera's)\n"
+             "  --depth N             specular bounces (default 10)\n"
+             "  --threads N           threads (default: all cores)\n"
+             "  --isa NAME            instruction set\n",
+    .run = render_run,
+};

@@ -1,0 +1,660 @@
+/* `lanes study`: the width-scaling study of Wu 2016, chapter 4. Renders each
+ * scene with every instruction set this CPU runs, single-ray and packet
+ * schemes, queue heuristics and queue sizes; measures render time (medians
+ * of repeated runs, counters off) and, in a separate counting run, SIMD
+ * utilisation, packet sizes, ray composition and live rays per node. Writes
+ * a CSV of every measurement, markdown tables shaped like the thesis'
+ * Tables 4.2-4.6 and gnuplot plots into one folder. */
+#define _DEFAULT_SOURCE /* mkdir, popen */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "bench/cli_commands.h"
+#include "bench/cli_common.h"
+#include "build/scene_load.h"
+#include "trace/packet_render.h"
+#include "trace/render.h"
+
+/* One measurement. Rows with rays == "all" carry the render's time; rows
+ * per ray type carry that type's counts and utilisation (and the render's
+ * time, for reference). NaN where a figure does not apply. */
+typedef struct {
+    char scene[64];
+    char rays[12];
+    char scheme[24];
+    char isa[16];
+    int lanes;
+    char queue[8];
+    int queue_min;
+    int packet;
+    double util_op, util_packet, seconds, mrays;
+    double ray_count, packets, live_node, live_leaf;
+} study_row;
+
+typedef struct {
+    study_row *rows;
+    size_t n, cap;
+} row_list;
+
+static study_row *add_row(row_list *l)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? l->cap * 2 : 256;
+        study_row *p = realloc(l->rows, cap * sizeof *p);
+        if (!p) cli_fail("study: out of memory");
+        l->rows = p;
+        l->cap = cap;
+    }
+    study_row *r = &l->rows[l->n++];
+    memset(r, 0, sizeof *r);
+    r->util_op = r->util_packet = r->seconds = r->mrays = NAN;
+    r->ray_count = r->packets = r->live_node = r->live_leaf = NAN;
+    return r;
+}
+
+typedef struct {
+    int reps;
+    int width, height;
+    int threads;
+    int packet;
+    const int *queue_sizes;
+    int queue_size_count;
+    bool isas[LANES_ISA_COUNT];
+    bool quiet;
+} study_plan;
+
+static int progress_done, progress_total;
+
+static void progress(const char *what)
+{
+    progress_done++;
+    if (isatty(2)) {
+        fprintf(stderr, "\r[%3d/%3d] %-70.70s", progress_done, progress_total, what);
+        if (progress_done == progress_total) fprintf(stderr, "\n");
+    } else {
+        fprintf(stderr, "[%d/%d] %s\n", progress_done, progress_total, what);
+    }
+    fflush(stderr);
+}
+
+/* Median render time of plan->reps runs with counters off. */
+static double timed(const lanes_scene *scene, const lanes_accel *accel, bool packets,
+                    const lanes_packet_render_options *po, const study_plan *plan, uint64_t *rays)
+{
+    double t[64];
+    int reps = plan->reps < 64 ? plan->reps : 64;
+    for (int i = 0; i < reps; i++) {
+        lanes_render_result r;
+        lanes_error err;
+        bool ok = packets ? lanes_packet_render(scene, accel, po, &r, NULL, &err)
+                          : lanes_render(scene, accel, &po->base, &r, &err);
+        if (!ok) cli_fail("study: %s", err.message);
+        t[i] = r.seconds;
+        *rays = r.rays;
+        lanes_render_result_free(&r);
+    }
+    return cli_median(t, (size_t)reps);
+}
+
+static void fill_common(study_row *r, const lanes_scene *scene, const char *rays, const char *scheme,
+                        lanes_isa isa, const char *queue, int queue_min, int packet)
+{
+    snprintf(r->scene, sizeof r->scene, "%s", scene->name);
+    snprintf(r->rays, sizeof r->rays, "%s", rays);
+    snprintf(r->scheme, sizeof r->scheme, "%s", scheme);
+    snprintf(r->isa, sizeof r->isa, "%s", lanes_isa_name(isa));
+    r->lanes = lanes_isa_lanes(isa);
+    snprintf(r->queue, sizeof r->queue, "%s", queue);
+    r->queue_min = queue_min;
+    r->packet = packet;
+}
+
+/* One packet configuration: a timed run and a counting run. */
+static void measure_packets(row_list *rows, const lanes_scene *scene, const lanes_accel *accel,
+                            lanes_isa isa, lanes_packet_scheme scheme, lanes_queue_heuristic queue,
+                            int queue_min, const study_plan *plan, FILE *hist)
+{
+    lanes_packet_render_options po;
+    lanes_packet_render_default_options(&po);
+    po.base.isa = isa;
+    po.base.width = plan->width;
+    po.base.height = plan->height;
+    po.base.threads = plan->threads;
+    po.scheme = scheme;
+    po.queue = queue;
+    po.queue_min = queue_min;
+    po.packet_size = plan->packet;
+    const char *scheme_name = scheme == LANES_PACKET_RANGED ? "ranged" : "packet";
+    char what[160];
+    snprintf(what, sizeof what, "%s: %s at %s, queue %s %d", scene->name, scheme_name, lanes_isa_name(isa),
+             lanes_queue_name(queue), queue_min);
+
+    uint64_t rays = 0;
+    double seconds = timed(scene, accel, true, &po, plan, &rays);
+
+    static lanes_packet_metrics m; /* large: packet-size histograms */
+    lanes_render_result r;
+    lanes_error err;
+    po.count = true;
+    if (!lanes_packet_render(scene, accel, &po, &r, &m, &err)) cli_fail("study: %s", err.message);
+    lanes_render_result_free(&r);
+
+    const char *qname = lanes_queue_name(queue);
+    study_row *all = add_row(rows);
+    fill_common(all, scene, "all", scheme_name, isa, qname, queue_min, plan->packet);
+    all->seconds = seconds;
+    all->mrays = (double)rays / seconds * 1e-6;
+    uint64_t live = 0, slots = 0, packets = 0;
+    double util_sum = 0.0, ray_total = 0.0;
+    for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
+        const lanes_packet_stats *s = &m.stats[t];
+        study_row *row = add_row(rows);
+        fill_common(row, scene, lanes_ray_type_name((lanes_ray_type)t), scheme_name, isa, qname, queue_min,
+                    plan->packet);
+        uint64_t tl = s->box_ops.active_lanes + s->tri_ops.active_lanes;
+        uint64_t ts = s->box_ops.lane_slots + s->tri_ops.lane_slots;
+        row->util_op = ts ? (double)tl / (double)ts : NAN;
+        row->util_packet = m.packets[t] ? m.packet_util_sum[t] / (double)m.packets[t] : NAN;
+        row->seconds = seconds;
+        row->mrays = (double)rays / seconds * 1e-6;
+        row->ray_count = (double)m.rays[t];
+        row->packets = (double)m.packets[t];
+        row->live_node = s->nodes_visited ? (double)s->node_live_rays / (double)s->nodes_visited : NAN;
+        row->live_leaf = s->leaves_visited ? (double)s->leaf_live_rays / (double)s->leaves_visited : NAN;
+        live += tl;
+        slots += ts;
+        packets += m.packets[t];
+        util_sum += m.packet_util_sum[t];
+        ray_total += (double)m.rays[t];
+        if (hist && m.packets[t])
+            for (int k = 1; k <= LANES_PACKET_MAX_RAYS; k++)
+                if (m.packets_of_size[t][k])
+                    fprintf(hist, "%s,%s,%s,%s,%s,%d,%d,%llu\n", scene->name, lanes_ray_type_name((lanes_ray_type)t),
+                            scheme_name, lanes_isa_name(isa), qname, queue_min, k,
+                            (unsigned long long)m.packets_of_size[t][k]);
+    }
+    all->util_op = slots ? (double)live / (double)slots : NAN;
+    all->util_packet = packets ? util_sum / (double)packets : NAN;
+    all->ray_count = ray_total;
+    all->packets = (double)packets;
+    progress(what);
+}
+
+static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_accel *accel,
+                           lanes_isa isa, lanes_scheme scheme, const study_plan *plan)
+{
+    lanes_packet_render_options po;
+    lanes_packet_render_default_options(&po);
+    po.base.isa = isa;
+    po.base.scheme = scheme;
+    po.base.width = plan->width;
+    po.base.height = plan->height;
+    po.base.threads = plan->threads;
+    uint64_t rays = 0;
+    double seconds = timed(scene, accel, false, &po, plan, &rays);
+    study_row *all = add_row(rows);
+    fill_common(all, scene, "all", lanes_scheme_name(scheme), isa, "none", 0, 1);
+    all->seconds = seconds;
+    all->mrays = (double)rays / seconds * 1e-6;
+    all->ray_count = (double)rays;
+    char what[160];
+    snprintf(what, sizeof what, "%s: %s at %s", scene->name, lanes_scheme_name(scheme), lanes_isa_name(isa));
+    progress(what);
+}
+
+/* ---- output ---------------------------------------------------------- */
+
+static void csv_number(FILE *f, double x)
+{
+    if (isnan(x))
+        fputs("", f);
+    else
+        fprintf(f, "%.6g", x);
+}
+
+static void write_csv(const char *path, const row_list *rows)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) cli_fail("study: cannot write %s: %s", path, strerror(errno));
+    fprintf(f, "scene,rays,scheme,isa,lanes,queue,queue_min,packet,util_op,util_packet,seconds,mrays,"
+               "ray_count,packets,live_rays_per_node,live_rays_per_leaf\n");
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        fprintf(f, "%s,%s,%s,%s,%d,%s,%d,%d,", r->scene, r->rays, r->scheme, r->isa, r->lanes, r->queue,
+                r->queue_min, r->packet);
+        double v[] = {r->util_op, r->util_packet, r->seconds, r->mrays, r->ray_count, r->packets,
+                      r->live_node, r->live_leaf};
+        for (size_t k = 0; k < sizeof v / sizeof v[0]; k++) {
+            if (k) fputc(',', f);
+            csv_number(f, v[k]);
+        }
+        fputc('\n', f);
+    }
+    fclose(f);
+}
+
+static void json_number(FILE *f, double x)
+{
+    if (isnan(x) || isinf(x))
+        fputs("null", f);
+    else
+        fprintf(f, "%.6g", x);
+}
+
+static void write_json(FILE *f, const row_list *rows, const char *dir)
+{
+    fprintf(f, "{\"folder\": ");
+    cli_json_string(f, dir);
+    fprintf(f, ", \"rows\": [");
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        fprintf(f, "%s\n  {\"scene\": ", i ? "," : "");
+        cli_json_string(f, r->scene);
+        fprintf(f, ", \"rays\": \"%s\", \"scheme\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"queue\": \"%s\", "
+                   "\"queue_min\": %d, \"packet\": %d, \"util_op\": ",
+                r->rays, r->scheme, r->isa, r->lanes, r->queue, r->queue_min, r->packet);
+        json_number(f, r->util_op);
+        fprintf(f, ", \"util_packet\": ");
+        json_number(f, r->util_packet);
+        fprintf(f, ", \"seconds\": ");
+        json_number(f, r->seconds);
+        fprintf(f, ", \"mrays\": ");
+        json_number(f, r->mrays);
+        fprintf(f, "}");
+    }
+    fprintf(f, "\n]}\n");
+}
+
+static const study_row *find(const row_list *rows, const char *scene, const char *rays, const char *scheme,
+                             const char *isa, const char *queue, int queue_min)
+{
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        if (strcmp(r->scene, scene) == 0 && strcmp(r->rays, rays) == 0 && strcmp(r->scheme, scheme) == 0 &&
+            strcmp(r->isa, isa) == 0 && (!queue || strcmp(r->queue, queue) == 0) &&
+            (queue_min < 0 || r->queue_min == queue_min))
+            return r;
+    }
+    return NULL;
+}
+
+/* The fastest packet row of a scene, ISA and queue heuristic over queue sizes. */
+static const study_row *best_packet(const row_list *rows, const char *scene, const char *isa, const char *queue)
+{
+    const study_row *best = NULL;
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        if (strcmp(r->scene, scene) || strcmp(r->rays, "all") || strcmp(r->scheme, "packet") ||
+            strcmp(r->isa, isa) || strcmp(r->queue, queue))
+            continue;
+        if (!best || r->seconds < best->seconds) best = r;
+    }
+    return best;
+}
+
+static void md_value(FILE *f, double x, const char *fmt)
+{
+    if (isnan(x))
+        fprintf(f, " n/a |");
+    else {
+        fputc(' ', f);
+        fprintf(f, fmt, x);
+        fprintf(f, " |");
+    }
+}
+
+static void write_tables(const char *path, const row_list *rows, char scenes[][64], int nscenes,
+                         const study_plan *plan)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) cli_fail("study: cannot write %s: %s", path, strerror(errno));
+    const lanes_cpu_features *cpu = lanes_cpu();
+    fprintf(f, "# lanes width-scaling study\n\nCPU: %s. Image %dx%d, packets of %d rays, %d thread(s), "
+               "median of %d run(s). Times in seconds.\n\n",
+            cpu->brand, plan->width, plan->height, plan->packet, plan->threads, plan->reps);
+    const char *queues[] = {"none", "CORNER", "MAX"};
+    int best_q = plan->queue_size_count ? plan->queue_sizes[0] : 1024;
+
+    fprintf(f, "## Table 4.2: SIMD utilization (packet utilization, Def. 4.2.2, all ray types; queue size %d)\n\n"
+               "| Scene | ISA | No Queue | CORNER queue | MAX queue |\n|---|---|---|---|---|\n", best_q);
+    for (int s = 0; s < nscenes; s++)
+        for (int i = 1; i < LANES_ISA_COUNT; i++) {
+            if (!plan->isas[i]) continue;
+            fprintf(f, "| %s | %s |", scenes[s], lanes_isa_name((lanes_isa)i));
+            for (int q = 0; q < 3; q++) {
+                const study_row *r = find(rows, scenes[s], "all", "packet", lanes_isa_name((lanes_isa)i), queues[q],
+                                          q == 0 ? plan->queue_sizes[0] : best_q);
+                md_value(f, r ? r->util_packet : NAN, "%.4f");
+            }
+            fputc('\n', f);
+        }
+
+    fprintf(f, "\n## Table 4.3: Ray composition (packet scheme, MAX queue)\n\n"
+               "| Scene | Primary | Specular | Shadow | Total Rays |\n|---|---|---|---|---|\n");
+    for (int s = 0; s < nscenes; s++) {
+        const char *isa = NULL;
+        for (int i = LANES_ISA_COUNT - 1; i >= 0 && !isa; i--)
+            if (plan->isas[i]) isa = lanes_isa_name((lanes_isa)i);
+        const study_row *p = find(rows, scenes[s], "primary", "packet", isa, "MAX", best_q);
+        const study_row *sp = find(rows, scenes[s], "specular", "packet", isa, "MAX", best_q);
+        const study_row *sh = find(rows, scenes[s], "shadow", "packet", isa, "MAX", best_q);
+        if (!p || !sp || !sh) continue;
+        double total = p->ray_count + sp->ray_count + sh->ray_count;
+        fprintf(f, "| %s | %.2f%% | %.2f%% | %.2f%% | %.0f |\n", scenes[s], 100 * p->ray_count / total,
+                100 * sp->ray_count / total, 100 * sh->ray_count / total, total);
+    }
+
+    fprintf(f, "\n## Table 4.4: Single ray rendering times (scalar, BVH2)\n\n| Scene | Time |\n|---|---|\n");
+    for (int s = 0; s < nscenes; s++) {
+        const study_row *r = find(rows, scenes[s], "all", "single", "scalar", NULL, -1);
+        fprintf(f, "| %s |", scenes[s]);
+        md_value(f, r ? r->seconds : NAN, "%.3f");
+        fputc('\n', f);
+    }
+
+    fprintf(f, "\n## Table 4.5: SIMD rendering times (packets; best over queue sizes, size in brackets)\n\n"
+               "| Scene |");
+    for (int i = 0; i < LANES_ISA_COUNT; i++)
+        if (plan->isas[i]) fprintf(f, " %s |", i == 0 ? "Single (scalar packets)" : lanes_isa_name((lanes_isa)i));
+    fprintf(f, "\n|---|");
+    for (int i = 0; i < LANES_ISA_COUNT; i++)
+        if (plan->isas[i]) fprintf(f, "---|");
+    fputc('\n', f);
+    for (int s = 0; s < nscenes; s++)
+        for (int q = 0; q < 3; q++) {
+            fprintf(f, "| %s%s%s |", scenes[s], q ? " " : "", q ? queues[q] : "");
+            for (int i = 0; i < LANES_ISA_COUNT; i++) {
+                if (!plan->isas[i]) continue;
+                const study_row *r = best_packet(rows, scenes[s], lanes_isa_name((lanes_isa)i), queues[q]);
+                if (r && q)
+                    fprintf(f, " %.3f (%d) |", r->seconds, r->queue_min);
+                else
+                    md_value(f, r ? r->seconds : NAN, "%.3f");
+            }
+            fputc('\n', f);
+        }
+
+    fprintf(f, "\n## Table 4.6: SIMD speedup\n\nS v X: single-ray scalar BVH2 time / packet time at X. "
+               "P v X: scalar packet time / packet time at X. W v X: single-ray scalar BVH2 / single-ray wide BVH at X.\n\n"
+               "| Scene |");
+    for (int i = 1; i < LANES_ISA_COUNT; i++)
+        if (plan->isas[i]) fprintf(f, " S v %s | P v %s | W v %s |", lanes_isa_name((lanes_isa)i),
+                                   lanes_isa_name((lanes_isa)i), lanes_isa_name((lanes_isa)i));
+    fprintf(f, "\n|---|");
+    for (int i = 1; i < LANES_ISA_COUNT; i++)
+        if (plan->isas[i]) fprintf(f, "---|---|---|");
+    fputc('\n', f);
+    for (int s = 0; s < nscenes; s++)
+        for (int q = 0; q < 3; q++) {
+            const study_row *single = find(rows, scenes[s], "all", "single", "scalar", NULL, -1);
+            const study_row *scalar_p = best_packet(rows, scenes[s], "scalar", queues[q]);
+            fprintf(f, "| %s%s%s |", scenes[s], q ? " " : "", q ? queues[q] : "");
+            for (int i = 1; i < LANES_ISA_COUNT; i++) {
+                if (!plan->isas[i]) continue;
+                const study_row *p = best_packet(rows, scenes[s], lanes_isa_name((lanes_isa)i), queues[q]);
+                const study_row *w = find(rows, scenes[s], "all", "wide", lanes_isa_name((lanes_isa)i), NULL, -1);
+                md_value(f, single && p ? single->seconds / p->seconds : NAN, "%.2f");
+                md_value(f, scalar_p && p ? scalar_p->seconds / p->seconds : NAN, "%.2f");
+                md_value(f, single && w ? single->seconds / w->seconds : NAN, "%.2f");
+            }
+            fputc('\n', f);
+        }
+
+    fprintf(f, "\n## Live rays per visited node (Bikker 2012, Table 2 measure; packet scheme, MAX queue %d)\n\n"
+               "| Scene | ISA | Rays | Interior | Leaf |\n|---|---|---|---|---|\n", best_q);
+    for (int s = 0; s < nscenes; s++)
+        for (int i = 0; i < LANES_ISA_COUNT; i++) {
+            if (!plan->isas[i]) continue;
+            for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
+                const study_row *r = find(rows, scenes[s], lanes_ray_type_name((lanes_ray_type)t), "packet",
+                                          lanes_isa_name((lanes_isa)i), "MAX", best_q);
+                if (!r || isnan(r->live_node)) continue;
+                fprintf(f, "| %s | %s | %s | %.1f | %.1f |\n", scenes[s], lanes_isa_name((lanes_isa)i), r->rays,
+                        r->live_node, r->live_leaf);
+            }
+        }
+    fclose(f);
+}
+
+/* gnuplot scripts read the CSV files; a missing gnuplot is reported, not hidden. */
+static bool run_gnuplot(const char *dir, const char *script_name, const char *script)
+{
+    char path[1024], cmd[2200];
+    snprintf(path, sizeof path, "%s/%s", dir, script_name);
+    FILE *f = fopen(path, "w");
+    if (!f) return false;
+    fputs(script, f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "cd '%s' && gnuplot '%s' 2>gnuplot.log", dir, script_name);
+    return system(cmd) == 0;
+}
+
+static void write_plots(const char *dir, char scenes[][64], int nscenes, const study_plan *plan, FILE *report)
+{
+    if (system("command -v gnuplot >/dev/null 2>&1") != 0) {
+        fprintf(report, "plots: gnuplot not found (install gnuplot-nox); CSV files are written\n");
+        return;
+    }
+    char script[16384];
+    for (int s = 0; s < nscenes; s++) {
+        const char *sc = scenes[s];
+        /* utilisation vs lanes per ray type, MAX queue at the first queue size */
+        snprintf(script, sizeof script,
+                 "set datafile separator ','\nset terminal pngcairo size 800,500\n"
+                 "set output 'util_vs_lanes_%s.png'\nset title 'SIMD utilization vs lanes: %s (packets, MAX queue %d)'\n"
+                 "set xlabel 'lanes'\nset ylabel 'packet utilization (Def. 4.2.2)'\nset yrange [0:1.05]\nset logscale x 2\n"
+                 "set key bottom left\n"
+                 "f(t)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"%%s\\\" && $3==\\\"packet\\\" && $6==\\\"MAX\\\" && $7==%d && $4!=\\\"avx512emu\\\"' measurements.csv | sort -t, -k5n\", t)\n"
+                 "plot for [t in 'primary shadow specular all'] f(t) using 5:10 with linespoints title t\n",
+                 sc, sc, plan->queue_sizes[0], sc, plan->queue_sizes[0]);
+        char name[128];
+        snprintf(name, sizeof name, "util_vs_lanes_%s.gp", sc);
+        if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
+
+        /* speedup over the scalar single-ray BVH2 vs lanes */
+        snprintf(script, sizeof script,
+                 "set datafile separator ','\nset terminal pngcairo size 800,500\n"
+                 "set output 'speedup_vs_lanes_%s.png'\nset title 'Speedup over scalar single-ray: %s'\n"
+                 "set xlabel 'lanes'\nset ylabel 'speedup'\nset logscale x 2\nset key top left\n"
+                 "base=system(\"awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"single\\\" && $4==\\\"scalar\\\" {print $11}' measurements.csv\")+0\n"
+                 "f(s,q)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"%%s\\\" && ($6==\\\"%%s\\\") && ($7==%d || $7==0) && $4!=\\\"avx512emu\\\"' measurements.csv | sort -t, -k5n\", s, q)\n"
+                 "plot f('packet','MAX') using 5:(base/$11) with linespoints title 'packets (MAX queue)', "
+                 "f('ranged','MAX') using 5:(base/$11) with linespoints title 'ranged packets', "
+                 "f('wide','none') using 5:(base/$11) with linespoints title 'single ray, wide BVH'\n",
+                 sc, sc, sc, sc, plan->queue_sizes[0]);
+        snprintf(name, sizeof name, "speedup_vs_lanes_%s.gp", sc);
+        if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
+
+        /* packet size histograms per ray type at the widest native set */
+        const char *isa = NULL;
+        for (int i = LANES_ISA_COUNT - 1; i >= 0 && !isa; i--)
+            if (plan->isas[i] && i != LANES_ISA_AVX512EMU) isa = lanes_isa_name((lanes_isa)i);
+        snprintf(script, sizeof script,
+                 "set datafile separator ','\nset terminal pngcairo size 1200,400\n"
+                 "set output 'packet_sizes_%s.png'\nset multiplot layout 1,3 title 'Rays per packet: %s (%s, MAX queue %d)'\n"
+                 "set style fill solid\nset xlabel 'rays in packet'\nset ylabel 'packets'\nset xrange [0:%d]\n"
+                 "f(t)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"%%s\\\" && $3==\\\"packet\\\" && $4==\\\"%s\\\" && $5==\\\"MAX\\\" && $6==%d' histograms.csv\", t)\n"
+                 "set title 'primary'\nplot f('primary') using 7:8 with impulses notitle\n"
+                 "set title 'shadow'\nplot f('shadow') using 7:8 with impulses notitle\n"
+                 "set title 'specular'\nplot f('specular') using 7:8 with impulses notitle\nunset multiplot\n",
+                 sc, sc, isa, plan->queue_sizes[0], plan->packet + 8, sc, isa, plan->queue_sizes[0]);
+        snprintf(name, sizeof name, "packet_sizes_%s.gp", sc);
+        if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
+
+        if (plan->queue_size_count > 1) {
+            /* utilisation and time vs queue size (Figs. 4.6, 4.19) */
+            snprintf(script, sizeof script,
+                     "set datafile separator ','\nset terminal pngcairo size 1100,450\n"
+                     "set output 'queue_size_%s.png'\nset multiplot layout 1,2 title 'Queue size: %s (%s)'\n"
+                     "set logscale x 2\nset xlabel 'minimum triangles in a queue node'\nset key bottom left\n"
+                     "f(q)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"specular\\\" && $3==\\\"packet\\\" && $4==\\\"%s\\\" && $6==\\\"%%s\\\"' measurements.csv | sort -t, -k7n\", q)\n"
+                     "set ylabel 'specular utilization'\nplot f('MAX') using 7:10 with linespoints title 'MAX', f('CORNER') using 7:10 with linespoints title 'CORNER'\n"
+                     "set ylabel 'render time (s)'\nplot f('MAX') using 7:11 with linespoints title 'MAX', f('CORNER') using 7:11 with linespoints title 'CORNER'\n"
+                     "unset multiplot\n",
+                     sc, sc, isa, sc, isa);
+            snprintf(name, sizeof name, "queue_size_%s.gp", sc);
+            if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
+        }
+    }
+}
+
+static int study_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
+{
+    const char *out_dir = "out/study", *value;
+    bool full = false, json = false;
+    const char *scene_specs[16];
+    int nspecs = 0;
+    study_plan plan = {.reps = 3, .width = 256, .height = 256, .threads = 1, .packet = LANES_PACKET_MAX_RAYS};
+    static const int quick_sizes[] = {1024};
+    static const int full_sizes[] = {256, 1024, 4096, 16384};
+    plan.queue_sizes = quick_sizes;
+    plan.queue_size_count = 1;
+    bool size_given = false, reps_given = false;
+
+    cli_args a = cli_args_begin(ctx, self, argc, argv);
+    while (cli_args_next(&a)) {
+        if (cli_flag(&a, "--full")) {
+            full = true;
+        } else if (cli_flag(&a, "--json")) {
+            json = true;
+        } else if (cli_value(&a, "--out", &out_dir)) {
+        } else if (cli_value(&a, "--reps", &value)) {
+            plan.reps = (int)cli_parse_count(&a, "--reps", value, 1, 64);
+            reps_given = true;
+        } else if (cli_value(&a, "--threads", &value)) {
+            plan.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
+        } else if (cli_value(&a, "--packet", &value)) {
+            plan.packet = (int)cli_parse_count(&a, "--packet", value, 16, LANES_PACKET_MAX_RAYS);
+        } else if (cli_value(&a, "--size", &value)) {
+            int w = 0, h = 0;
+            char tail;
+            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 8192 || h > 8192)
+                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..8192, not '%s'", value);
+            plan.width = w, plan.height = h;
+            size_given = true;
+        } else if (cli_global_option(&a)) {
+        } else if (a.argv[a.i][0] != '-') {
+            if (nspecs == 16) cli_usage_error(ctx, self, "at most 16 scenes");
+            scene_specs[nspecs++] = a.argv[a.i];
+        } else {
+            cli_unknown_option(&a);
+        }
+    }
+    if (full) {
+        plan.queue_sizes = full_sizes;
+        plan.queue_size_count = 4;
+        if (!size_given) plan.width = plan.height = 512; /* the thesis' image size */
+        if (!reps_given) plan.reps = 5;
+        if (nspecs == 0) {
+            scene_specs[nspecs++] = "dragon";
+            scene_specs[nspecs++] = "sponza-bunny";
+            scene_specs[nspecs++] = "20-bunnies";
+            scene_specs[nspecs++] = "hairball";
+        }
+    }
+    if (nspecs == 0) scene_specs[nspecs++] = "default";
+    /* --isa narrows the study to scalar (the baseline) plus that set */
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = (lanes_isa)i;
+        plan.isas[i] = lanes_isa_supported(isa) &&
+                       (ctx->forced_isa == LANES_ISA_NONE || isa == ctx->forced_isa || isa == LANES_ISA_SCALAR);
+    }
+    if (mkdir(out_dir, 0777) != 0 && errno != EEXIST) cli_fail("study: cannot create %s: %s", out_dir, strerror(errno));
+
+    int nisa = 0;
+    for (int i = 0; i < LANES_ISA_COUNT; i++) nisa += plan.isas[i];
+    /* per scene: single scalar + wide per ISA + ranged per ISA + packet none + packet MAX/CORNER per size */
+    progress_total = nspecs * (1 + nisa + nisa + nisa * (1 + 2 * plan.queue_size_count));
+
+    char hist_path[1024];
+    snprintf(hist_path, sizeof hist_path, "%s/histograms.csv", out_dir);
+    FILE *hist = fopen(hist_path, "w");
+    if (!hist) cli_fail("study: cannot write %s: %s", hist_path, strerror(errno));
+    fprintf(hist, "scene,rays,scheme,isa,queue,queue_min,rays_in_packet,packets\n");
+
+    row_list rows = {0};
+    char scenes[16][64];
+    for (int s = 0; s < nspecs; s++) {
+        lanes_scene scene;
+        lanes_error err;
+        if (!lanes_scene_load(scene_specs[s], &scene, &err)) cli_fail("%s", err.message);
+        snprintf(scenes[s], sizeof scenes[s], "%s", scene.name);
+        lanes_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
+        lanes_accel *by_width[17] = {0};
+        /* the BVH2 is shared; each wide width gets its own collapse */
+        if (!lanes_accel_build(&scene, 0, 0, &accel4, &err)) cli_fail("%s", err.message);
+        accel8.bvh2 = accel4.bvh2;
+        accel16.bvh2 = accel4.bvh2;
+        if (!lanes_wbvh_from_bvh2(&accel4.bvh2, 4, &accel4.wide, &err) ||
+            !lanes_wbvh_from_bvh2(&accel4.bvh2, 8, &accel8.wide, &err) ||
+            !lanes_wbvh_from_bvh2(&accel4.bvh2, 16, &accel16.wide, &err))
+            cli_fail("%s", err.message);
+        by_width[4] = &accel4, by_width[8] = &accel8, by_width[16] = &accel16;
+
+        measure_single(&rows, &scene, &accel4, LANES_ISA_SCALAR, LANES_SCHEME_SINGLE, &plan);
+        for (int i = 0; i < LANES_ISA_COUNT; i++) {
+            if (!plan.isas[i]) continue;
+            lanes_isa isa = (lanes_isa)i;
+            const lanes_kernels *k = lanes_kernels_for(isa);
+            measure_single(&rows, &scene, by_width[k->wide_width], isa, LANES_SCHEME_WIDE, &plan);
+            measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_RANGED, LANES_QUEUE_MAX, plan.queue_sizes[0],
+                            &plan, hist);
+            measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_PARTITION, LANES_QUEUE_NONE,
+                            plan.queue_sizes[0], &plan, hist);
+            for (int q = 0; q < plan.queue_size_count; q++) {
+                measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_PARTITION, LANES_QUEUE_MAX,
+                                plan.queue_sizes[q], &plan, hist);
+                measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_PARTITION, LANES_QUEUE_CORNER,
+                                plan.queue_sizes[q], &plan, hist);
+            }
+        }
+        lanes_wbvh_free(&accel8.wide);
+        lanes_wbvh_free(&accel16.wide);
+        lanes_accel_free(&accel4);
+        lanes_scene_free(&scene);
+    }
+    fclose(hist);
+
+    char path[1024];
+    snprintf(path, sizeof path, "%s/measurements.csv", out_dir);
+    write_csv(path, &rows);
+    snprintf(path, sizeof path, "%s/tables.md", out_dir);
+    write_tables(path, &rows, scenes, nspecs, &plan);
+    FILE *report = json ? stderr : stdout;
+    write_plots(out_dir, scenes, nspecs, &plan, report);
+    if (json) {
+        write_json(stdout, &rows, out_dir);
+    } else {
+        FILE *t = fopen(path, "r");
+        char line[1024];
+        while (t && fgets(line, sizeof line, t)) fputs(line, stdout);
+        if (t) fclose(t);
+        printf("\nwrote %s/measurements.csv, %s/histograms.csv, %s/tables.md and the plots "
+               "(util_vs_lanes_*.png, speedup_vs_lanes_*.png, packet_sizes_*.png%s)\n",
+               out_dir, out_dir, out_dir, plan.queue_size_count > 1 ? ", queue_size_*.png" : "");
+    }
+    free(rows.rows);
+    return 0;
+}
+
+const cli_command cli_cmd_study = {
+    .name = "study",
+    .summary = "the width-scaling study: utilization, packet sizes, render times per ISA",
+    .usage = "usage: lanes study [SCENE...] [options]\n"
+             "with no scene: a short study of the embedded default scene; with --full and no\n"
+             "scene: dragon, sponza-bunny, 20-bunnies and hairball at 512x512 (the thesis' set)\n"
+             "  --full            thesis-sized sweep: queue sizes 256..16384, 512x512, 5 runs\n"
+             "  --out DIR         output folder (default out/study)\n"
+             "  --size WxH        image size (default 256x256; --full: 512x512)\n"
+             "  --reps N          timed runs per configuration, median reported (default 3)\n"
+             "  --packet N        rays per packet (default 1024)\n"
+             "  --threads N       threads per render (default 1: the thesis' single core)\n"
+             "  --json            print every measurement as JSON on stdout\n"
+             "  --isa NAME        study scalar and NAME only\n",
+    .run = study_run,
+};
