@@ -104,7 +104,7 @@ static double timed(const lanes_scene *scene, const lanes_accel *accel, bool pac
 static void fill_common(study_row *r, const lanes_scene *scene, const char *rays, const char *scheme,
                         lanes_isa isa, const char *queue, int queue_min, int packet)
 {
-    snprintf(r->scene, sizeof r->scene, "%s", scene->name);
+    snprintf(r->scene, sizeof r->scene, "%.63s", scene->name);
     snprintf(r->rays, sizeof r->rays, "%s", rays);
     snprintf(r->scheme, sizeof r->scheme, "%s", scheme);
     snprintf(r->isa, sizeof r->isa, "%s", lanes_isa_name(isa));
@@ -424,7 +424,7 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
 /* gnuplot scripts read the CSV files; a missing gnuplot is reported, not hidden. */
 static bool run_gnuplot(const char *dir, const char *script_name, const char *script)
 {
-    char path[1024], cmd[2200];
+    char path[2400], cmd[5000];
     snprintf(path, sizeof path, "%s/%s", dir, script_name);
     FILE *f = fopen(path, "w");
     if (!f) return false;
@@ -452,7 +452,7 @@ static void write_plots(const char *dir, char scenes[][64], int nscenes, const s
                  "f(t)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"%%s\\\" && $3==\\\"packet\\\" && $6==\\\"MAX\\\" && $7==%d && $4!=\\\"avx512emu\\\"' measurements.csv | sort -t, -k5n\", t)\n"
                  "plot for [t in 'primary shadow specular all'] f(t) using 5:10 with linespoints title t\n",
                  sc, sc, plan->queue_sizes[0], sc, plan->queue_sizes[0]);
-        char name[128];
+        char name[1200];
         snprintf(name, sizeof name, "util_vs_lanes_%s.gp", sc);
         if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
 
@@ -583,7 +583,7 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         lanes_scene scene;
         lanes_error err;
         if (!lanes_scene_load(scene_specs[s], &scene, &err)) cli_fail("%s", err.message);
-        snprintf(scenes[s], sizeof scenes[s], "%s", scene.name);
+        snprintf(scenes[s], sizeof scenes[s], "%.63s", scene.name);
         lanes_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
         lanes_accel *by_width[17] = {0};
         /* the BVH2 is shared; each wide width gets its own collapse */

@@ -36,6 +36,11 @@ static const cli_command cli_cmd_help = {
 
 static const cli_command *const commands[] = {
     &cli_cmd_info,
+    &cli_cmd_render,
+#ifdef LANES_HAVE_COMPARE
+    &cli_cmd_compare,
+#endif
+    &cli_cmd_study,
     &cli_cmd_bench,
     &cli_cmd_help,
     NULL,
