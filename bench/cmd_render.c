@@ -77,7 +77,8 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     if (!packets && single_scheme < 0)
         cli_usage_error(ctx, self, "unknown scheme '%s' (single, wide, packet, ranged)", scheme_name);
     int queue = lanes_queue_from_name(queue_name);
-    if (queue < 0) cli_usage_error(ctx, self, "unknown queue heuristic '%s' (MAX, CORNER, none)", queue_name);
+    if (queue < 0)
+        cli_usage_error(ctx, self, "unknown queue heuristic '%s' (MAX, CORNER, none, arrival)", queue_name);
     if (strcmp(algo_name, "moller") == 0)
         po.base.algo = LANES_TRI_MOLLER;
     else if (strcmp(algo_name, "watertight") == 0)
@@ -150,7 +151,9 @@ const cli_command cli_cmd_render = {
              "embedded default scene\n"
              "  -o, --output FILE     image to write (PNG, EXR, ... as OpenImageIO knows them)\n"
              "  --scheme S            single (BVH2), wide (wide BVH, default), packet, ranged\n"
-             "  --queue Q             specular packets: MAX (default), CORNER, none (global division)\n"
+             "  --queue Q             specular packets: MAX (default), CORNER, none (global division,\n"
+             "                        rays in no particular order), arrival (global division in the\n"
+             "                        order the rays were made)\n"
              "  --queue-min N         queue nodes hold at least N triangles (default 1024)\n"
              "  --packet N            rays per packet, at most 1024 (default 1024)\n"
              "  --no-frustum          packets without frustum culling\n"

@@ -12,7 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
-static const char *const queue_names[LANES_QUEUE_COUNT] = {"none", "MAX", "CORNER"};
+static const char *const queue_names[LANES_QUEUE_COUNT] = {"none", "MAX", "CORNER", "arrival"};
 static const char *const ray_type_names[LANES_RAY_TYPE_COUNT] = {"primary", "shadow", "specular"};
 
 const char *lanes_queue_name(lanes_queue_heuristic q)
@@ -242,6 +242,7 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
                 ps = (pending_shadow){sr->o, sr->d, 0.0f, sr->tfar, sr->add, r->pixel, sr->light};
             }
             if (!push_shadow(&w->shadows, ps)) w->failed = true;
+            w->m.shadow_made++;
         }
         break;
     }
@@ -253,6 +254,7 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
         for (int i = 0; i < n; i++)
             if (!push_ray(&w->queue[1], (pending_ray){b[i].o, b[i].d, b[i].weight, r->pixel, b[i].seed}))
                 w->failed = true;
+        w->m.specular_made[depth + 1] += (uint64_t)n;
         break;
     }
     }
@@ -363,38 +365,57 @@ static bool ensure_keys(worker_t *w, size_t n)
     return grow((void **)&w->keys, &w->keys_cap, n, sizeof(uint64_t));
 }
 
-/* Sorts the rays into packets and traces them; key layout (high to low):
- * group (queue node and direction set), cell, ray index. */
+/* Sorts the rays into packets and traces them. Sort keys, high bits to low:
+ * queued: queue node * 8 + direction set (32 bits), exit cell (8), ray (24);
+ * global division: direction set (8 bits), order (32), ray (24), where the
+ * order is a hash of the ray's index (none) or zero (arrival). A packet
+ * takes consecutive rays of one group: key >> GROUP_SHIFT. */
+static int group_shift(lanes_queue_heuristic h)
+{
+    return h == LANES_QUEUE_MAX || h == LANES_QUEUE_CORNER ? 32 : 56;
+}
+
+static uint64_t shuffle_order(uint64_t i)
+{
+    uint64_t x = (i + 1) * 0x9E3779B97F4A7C15ull;
+    x ^= x >> 29;
+    x *= 0xBF58476D1CE4E5B9ull;
+    x ^= x >> 32;
+    return x & 0xffffffffu;
+}
+
 static void trace_specular(worker_t *w, int depth)
 {
     const job_t *job = w->job;
     ray_list *q = &w->queue[0];
     size_t n = q->n;
     if (n == 0) return;
-    if (!ensure_keys(w, n)) {
-        w->failed = true;
-        return;
-    }
-    if (n >= (1u << 24)) {
-        w->failed = true; /* more rays than the sort key has room for */
+    if (n >= (1u << 24) || !ensure_keys(w, n)) {
+        w->failed = true; /* more rays than the sort key has room for, or out of memory */
         return;
     }
     lanes_queue_heuristic h = job->opt->queue;
-    /* group ids: queue node * 8 + set; n < 2^24 per stage */
+    bool queued = h == LANES_QUEUE_MAX || h == LANES_QUEUE_CORNER;
+    int shift = group_shift(h);
     for (size_t i = 0; i < n; i++) {
         const pending_ray *r = &q->a[i];
         uint64_t set = direction_set(r->d, h == LANES_QUEUE_CORNER);
-        uint64_t node = h == LANES_QUEUE_NONE ? 0 : queue_node(job, r->o);
-        uint64_t cell = h == LANES_QUEUE_NONE ? 0 : exit_cell(job, r->o, r->d);
-        w->keys[i] = ((node * 8 + set) << 32) | (cell << 24) | (uint64_t)i;
+        if (queued) {
+            uint64_t node = queue_node(job, r->o);
+            uint64_t cell = exit_cell(job, r->o, r->d);
+            w->keys[i] = ((node * 8 + set) << 32) | (cell << 24) | (uint64_t)i;
+        } else {
+            uint64_t order = h == LANES_QUEUE_NONE ? shuffle_order(i) : 0;
+            w->keys[i] = (set << 56) | (order << 24) | (uint64_t)i;
+        }
     }
     qsort(w->keys, n, sizeof(uint64_t), cmp_u64);
     size_t size = (size_t)job->opt->packet_size;
     pending_ray batch[LANES_PACKET_MAX_RAYS];
     for (size_t start = 0; start < n;) {
-        uint64_t group = w->keys[start] >> 32;
+        uint64_t group = w->keys[start] >> shift;
         size_t end = start;
-        while (end < n && end - start < size && (w->keys[end] >> 32) == group) end++;
+        while (end < n && end - start < size && (w->keys[end] >> shift) == group) end++;
         for (size_t i = start; i < end; i++) {
             const pending_ray *r = &q->a[w->keys[i] & 0xffffffu];
             batch[i - start] = *r;
@@ -403,6 +424,7 @@ static void trace_specular(worker_t *w, int depth)
         w->pk.count = end - start;
         trace_filled_packet(w, LANES_RAYS_SPECULAR, false);
         w->by_depth[depth] += end - start;
+        w->m.specular_traced[depth] += end - start;
         for (size_t i = 0; i < end - start; i++) {
             w->secondary_rays++;
             shade_hit(w, &batch[i], &w->hits[i], depth);
@@ -439,6 +461,7 @@ static void trace_shadows(worker_t *w)
         }
         w->pk.count = end - start;
         trace_filled_packet(w, LANES_RAYS_SHADOW, true);
+        w->m.shadow_traced += end - start;
         for (size_t i = start; i < end; i++) {
             const pending_shadow *s = &sl->a[w->keys[i] & 0xffffffffu];
             w->shadow_rays++;
@@ -651,6 +674,12 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
         out->secondary_rays += w->secondary_rays;
         for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += w->by_depth[d];
         if (metrics) {
+            metrics->shadow_made += w->m.shadow_made;
+            metrics->shadow_traced += w->m.shadow_traced;
+            for (int d = 0; d <= LANES_MAX_DEPTH; d++) {
+                metrics->specular_made[d] += w->m.specular_made[d];
+                metrics->specular_traced[d] += w->m.specular_traced[d];
+            }
             for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
                 metrics->rays[t] += w->m.rays[t];
                 metrics->packets[t] += w->m.packets[t];
@@ -675,7 +704,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
         worker_free(w);
     }
     free(workers);
-    if (metrics && job.subtree && opt->queue != LANES_QUEUE_NONE) {
+    if (metrics && job.subtree && (opt->queue == LANES_QUEUE_MAX || opt->queue == LANES_QUEUE_CORNER)) {
         /* queue nodes: the nodes holding queue_min triangles with no child that does */
         for (size_t i = 0; i < accel->bvh2.node_count; i++) {
             const lanes_bvh2_node *nd = &accel->bvh2.nodes[i];

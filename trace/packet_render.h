@@ -13,9 +13,16 @@
 #include "trace/render.h"
 
 typedef enum lanes_queue_heuristic {
-    LANES_QUEUE_NONE = 0, /* global division: 6 sets by dominant direction axis and sign */
+    /* Global division as the thesis describes it (3.4.4): 6 sets by dominant
+     * direction axis and sign, rays taken from a set in no particular order
+     * ("essentially randomly selecting rays"): a fixed pseudo-random order. */
+    LANES_QUEUE_NONE = 0,
     LANES_QUEUE_MAX,      /* queued at BVH nodes; 6 sets by dominant axis and sign */
     LANES_QUEUE_CORNER,   /* queued at BVH nodes; 8 sets by direction octant */
+    /* Global division in the order the rays were made, which follows the
+     * Hilbert order of the primary packets: a stronger baseline than the
+     * thesis' (not in the thesis). */
+    LANES_QUEUE_ARRIVAL,
     LANES_QUEUE_COUNT
 } lanes_queue_heuristic;
 
@@ -57,6 +64,10 @@ typedef struct lanes_packet_metrics {
      * options.count): the mean packet utilisation is the sum / packets. */
     double packet_util_sum[LANES_RAY_TYPE_COUNT];
     uint64_t queue_nodes;          /* queued tracing: number of queue nodes */
+    /* Bookkeeping of packet construction: rays made and rays traced, per
+     * specular bounce and for shadows; equal when no ray is lost or doubled. */
+    uint64_t specular_made[LANES_MAX_DEPTH + 1], specular_traced[LANES_MAX_DEPTH + 1];
+    uint64_t shadow_made, shadow_traced;
 } lanes_packet_metrics;
 
 bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
