@@ -11,6 +11,13 @@ LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *en
 {
     vfloat t1, t2, tin = r->tnear, tout = r->tfar;
     vmask neg;
+    /* An empty box (min > max on an axis) is missed. The octant choice of
+     * near and far planes already misses boxes inverted by more than the
+     * rounding of (plane - o); this catches the rest, once per box. */
+    if (!(b->min[0] <= b->max[0] && b->min[1] <= b->max[1] && b->min[2] <= b->max[2])) {
+        *entry = tin;
+        return vm_false();
+    }
 
     t1 = vf_mul(vf_sub(vf_set1(b->min[0]), r->ox), r->rdx);
     t2 = vf_mul(vf_sub(vf_set1(b->max[0]), r->ox), r->rdx);

@@ -97,7 +97,11 @@ LANES_BODY size_t box_wide_body(const lanes_ray *ray, const lanes_boxes *boxes, 
         tout = vf_min(vf_mul(vf_sub(vf_load(far_y + i), oy), ry), tout);
         tin = vf_max(vf_mul(vf_sub(vf_load(near_z + i), oz), rz), tin);
         tout = vf_min(vf_mul(vf_sub(vf_load(far_z + i), oz), rz), tout);
-        vmask m = vm_and(vf_le(tin, tout), live);
+        /* empty boxes (min > max) are missed, however thin: see box_core.h */
+        vmask nonempty = vm_and(vf_le(vf_load(boxes->minx + i), vf_load(boxes->maxx + i)),
+                                vm_and(vf_le(vf_load(boxes->miny + i), vf_load(boxes->maxy + i)),
+                                       vf_le(vf_load(boxes->minz + i), vf_load(boxes->maxz + i))));
+        vmask m = vm_and(vm_and(vf_le(tin, tout), live), nonempty);
         LANES_COUNT(stats, live);
         lanes_put_bits(hit, i, m);
         if (tentry) vf_store_masked(tentry + i, m, tin);

@@ -69,7 +69,8 @@ LANES_BODY vmask boxes_interval(const lanes_frustum *f, const vfloat lo[3], cons
         entry = vf_max(t_near.lo, entry);
         exit_ = vf_min(t_far.hi, exit_);
     }
-    return vf_le(entry, exit_);
+    /* "not after", so a NaN (from an infinite box bound) keeps the box */
+    return vm_not(vf_gt(entry, exit_));
 }
 
 /* Rounding bound of the plane function x_a - (c + s * h), for the test. */
@@ -90,7 +91,9 @@ LANES_BODY vmask boxes_planes(const lanes_frustum *f, const vfloat lo[3], const 
     vfloat h_hi = f->ksign > 0.0f ? vf_sub(hi[k], near) : vf_sub(near, lo[k]);
     vfloat htol = vf_add(vf_mul(vf_add(vf_abs(hi[k]), vf_abs(lo[k])), vf_set1(4.0f * LANES_U)),
                          vf_add(vf_set1(fabsf(f->near) * 4.0f * LANES_U), vf_set1(WIDEN_ABS)));
-    vmask keep = vf_ge(vf_add(h_hi, htol), zero);
+    /* Every test below culls only on an ordered "outside" compare: a NaN,
+     * say 0 * inf from a flat slope over an unbounded box, keeps the box. */
+    vmask keep = vm_not(vf_lt(vf_add(h_hi, htol), zero));
     h_lo = vf_max(h_lo, zero);
     h_hi = vf_max(h_hi, zero);
     for (int j = 1; j <= 2; j++) {
@@ -99,11 +102,11 @@ LANES_BODY vmask boxes_planes(const lanes_frustum *f, const vfloat lo[3], const 
         /* largest value of x_a - (lo0 + ls * h) over the box */
         vfloat hl = ls > 0.0f ? h_lo : h_hi;
         vfloat g_lo = vf_sub(hi[a], vf_add(vf_set1(f->lo0[a]), vf_mul(vf_set1(ls), hl)));
-        keep = vm_and(keep, vf_ge(vf_add(g_lo, plane_tol(hi[a], f->lo0[a], ls, hl)), zero));
+        keep = vm_andnot(keep, vf_lt(vf_add(g_lo, plane_tol(hi[a], f->lo0[a], ls, hl)), zero));
         /* largest value of (hi0 + hs * h) - x_a over the box */
         vfloat hh = hs > 0.0f ? h_hi : h_lo;
         vfloat g_hi = vf_sub(vf_add(vf_set1(f->hi0[a]), vf_mul(vf_set1(hs), hh)), lo[a]);
-        keep = vm_and(keep, vf_ge(vf_add(g_hi, plane_tol(lo[a], f->hi0[a], hs, hh)), zero));
+        keep = vm_andnot(keep, vf_lt(vf_add(g_hi, plane_tol(lo[a], f->hi0[a], hs, hh)), zero));
     }
     return keep;
 }

@@ -88,7 +88,7 @@ void LANES_FN(lanes_frustum_build)(const lanes_rays *rays, const uint32_t *idx, 
      * h = (x_k - near) * ksign >= 0 has x_a = cross_a + sigma_a * h. */
     int ax[2] = {(k + 1) % 3, (k + 2) % 3};
     vfloat cmin[2] = {inf, inf}, cmax[2] = {ninf, ninf}, smin[2] = {inf, inf}, smax[2] = {ninf, ninf};
-    vfloat errmax = zero;
+    vfloat errmax = zero, steep = zero;
     const vfloat near = vf_set1(f->near), ksign = vf_set1(f->ksign);
     for (size_t i = 0; i < n; i += LANES_W) {
         lanes_vray r = lanes_load_rays(rays, idx, i, n, true, false);
@@ -107,8 +107,12 @@ void LANES_FN(lanes_frustum_build)(const lanes_rays *rays, const uint32_t *idx, 
             /* bound on the rounding of cross: a few ulps of its terms */
             vfloat mag = vf_add(vf_abs(o[a]), vf_abs(vf_mul(sigma, back)));
             errmax = vf_max(vf_select(act, mag, zero), errmax);
+            steep = vf_max(vf_select(act, vf_abs(sigma), zero), steep);
         }
     }
+    /* A dominant axis whose smallest component is tiny against the others
+     * (a denormal, say) gives slopes that overflow: no planes then. */
+    if (!(vf_reduce_max(steep) < FRUSTUM_MAX_COORD) || !(vf_reduce_max(errmax) < FRUSTUM_MAX_COORD)) return;
     float err = vf_reduce_max(errmax) * (8.0f * LANES_U) + WIDEN_ABS;
     for (int j = 0; j < 2; j++) {
         int a = ax[j];

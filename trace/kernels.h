@@ -11,7 +11,8 @@
  * - Rays pass through lanes_rays_prepare() first. It computes reciprocal
  *   directions and turns every invalid ray (NaN or infinite component in o or
  *   d, NaN tnear or tfar, d = 0) into an inactive one (tnear = +inf,
- *   tfar = -inf), which no kernel ever reports as a hit.
+ *   tfar = -inf), which no kernel ever reports as a hit. It also clamps
+ *   infinite tnear and tfar to -FLT_MAX and FLT_MAX (see ray_kernels.c).
  * - Hit masks are bit arrays: bit i of word i/32 is ray (or primitive) i.
  * - Where a kernel writes per-hit values (t, u, v), it writes them only for
  *   hits; the caller's values for misses are left untouched.

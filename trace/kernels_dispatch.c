@@ -3,6 +3,7 @@
  * helpers for the kernels' data (allocation, scalar ray set-up). */
 #include "trace/kernels.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +62,9 @@ bool lanes_ray_prepare(lanes_ray *ray)
     for (int a = 0; a < 3; a++) ok = ok && isfinite(ray->o[a]) && isfinite(ray->d[a]);
     ok = ok && (ray->d[0] != 0.0f || ray->d[1] != 0.0f || ray->d[2] != 0.0f);
     for (int a = 0; a < 3; a++) ray->rd[a] = 1.0f / ray->d[a];
+    /* finite ends, as lanes_rays_prepare does (see ray_kernels.c) */
+    if (ray->tnear < -FLT_MAX) ray->tnear = -FLT_MAX;
+    if (ray->tfar > FLT_MAX) ray->tfar = FLT_MAX;
     if (!ok) {
         ray->tnear = INFINITY;
         ray->tfar = -INFINITY;

@@ -3,6 +3,8 @@
 #include "trace/kernel_common.h"
 #include "trace/kernel_decls.h"
 
+#include <float.h>
+
 /* x * 0 == 0 holds exactly for finite x: NaN and ±inf give NaN. */
 LANES_BODY vmask finite(vfloat x) { return vf_eq(vf_mul(x, vf_zero()), vf_zero()); }
 
@@ -33,6 +35,11 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
         vf_store_masked(r->rdx + i, live, rdx);
         vf_store_masked(r->rdy + i, live, rdy);
         vf_store_masked(r->rdz + i, live, rdz);
+        /* Infinite ends become ±FLT_MAX: a slab that a d = ±0 ray never
+         * enters has both distances at the same infinity, and only finite
+         * ends keep such an empty interval from overlapping [tnear, tfar]. */
+        vf_store_masked(r->tnear + i, live, vf_max(tnear, vf_set1(-FLT_MAX)));
+        vf_store_masked(r->tfar + i, live, vf_min(tfar, vf_set1(FLT_MAX)));
         vmask dead = vm_andnot(live, ok);
         vf_store_masked(r->tnear + i, dead, vf_set1(INFINITY));
         vf_store_masked(r->tfar + i, dead, vf_set1(-INFINITY));

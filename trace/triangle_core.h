@@ -114,14 +114,17 @@ LANES_BODY tri_result watertight_core(vfloat ax, vfloat ay, vfloat az, vfloat bx
         return r;
     }
     vfloat Az = vf_mul(sz, az), Bz = vf_mul(sz, bz), Cz = vf_mul(sz, cz);
-    vfloat T = vf_add(vf_add(vf_mul(U, Az), vf_mul(V, Bz)), vf_mul(W, Cz));
+    /* Barycentrics first, then t from them: U*Az + V*Bz + W*Cz itself scales
+     * with the cube of the triangle's size and underflows to 0 for tiny
+     * triangles (t = 0 at size 1e-15), while each barycentric is O(1). */
     vfloat inv = vf_rcp(det);
-    vfloat t = vf_mul(T, inv);
+    vfloat b0 = vf_mul(U, inv), b1 = vf_mul(V, inv), b2 = vf_mul(W, inv);
+    vfloat t = vf_add(vf_add(vf_mul(b0, Az), vf_mul(b1, Bz)), vf_mul(b2, Cz));
     m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
     r.hit = m;
     r.t = t;
-    r.u = want_uv ? vf_mul(V, inv) : zero;
-    r.v = want_uv ? vf_mul(W, inv) : zero;
+    r.u = want_uv ? b1 : zero;
+    r.v = want_uv ? b2 : zero;
     return r;
 }
 
@@ -192,9 +195,38 @@ LANES_BODY tri_result watertight_packet_core(const lanes_vray *r, const lanes_tr
                            want_uv);
 }
 
+/* A triangle whose edge vectors have an exactly zero cross product (repeated
+ * vertices, vertices on one axis-parallel line, ...) has no area and is
+ * never hit: without this, rounding can give it a nonzero determinant. The
+ * products of the cross product round alike when equal, so an exact zero
+ * stays zero; a near-degenerate sliver is still tested. */
+static inline bool tri_degenerate(const lanes_triangle *t)
+{
+    float e1[3], e2[3];
+    for (int a = 0; a < 3; a++) e1[a] = t->v1[a] - t->v0[a], e2[a] = t->v2[a] - t->v0[a];
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
+}
+
+LANES_BODY vmask tris_have_area(vfloat ax, vfloat ay, vfloat az, vfloat bx, vfloat by, vfloat bz,
+                                vfloat cx, vfloat cy, vfloat cz)
+{
+    vfloat e1x = vf_sub(bx, ax), e1y = vf_sub(by, ay), e1z = vf_sub(bz, az);
+    vfloat e2x = vf_sub(cx, ax), e2y = vf_sub(cy, ay), e2z = vf_sub(cz, az);
+    vfloat zero = vf_zero();
+    vmask flat = vm_and(vf_eq(vf_sub(vf_mul(e1y, e2z), vf_mul(e1z, e2y)), zero),
+                        vm_and(vf_eq(vf_sub(vf_mul(e1z, e2x), vf_mul(e1x, e2z)), zero),
+                               vf_eq(vf_sub(vf_mul(e1x, e2y), vf_mul(e1y, e2x)), zero)));
+    return vm_not(flat);
+}
+
 LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
                                   const lanes_triangle *tri, bool want_uv)
 {
+    if (tri_degenerate(tri)) {
+        tri_result none = {vf_zero(), vf_zero(), vf_zero(), vm_false()};
+        return none;
+    }
     if (algo == LANES_TRI_WATERTIGHT) return watertight_packet_core(r, tri, want_uv);
     return moller_core(r->ox, r->oy, r->oz, r->dx, r->dy, r->dz, vf_set1(tri->v0[0]),
                        vf_set1(tri->v0[1]), vf_set1(tri->v0[2]), vf_set1(tri->v1[0]),
@@ -237,19 +269,20 @@ static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ra
 LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size_t i, vfloat tfar,
                                   vmask live, bool want_uv)
 {
+    vfloat v[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++) v[k][a] = vf_loadu(w->v[k][a] + i);
+    /* degenerate triangles are never hit (see tri_degenerate); the test is
+     * the same whatever order the axes are in */
+    live = vm_and(live, tris_have_area(v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
+                                       v[2][1], v[2][2]));
     if (algo == LANES_TRI_WATERTIGHT)
-        return watertight_core(
-            vf_sub(vf_loadu(w->v[0][0] + i), w->ox), vf_sub(vf_loadu(w->v[0][1] + i), w->oy),
-            vf_sub(vf_loadu(w->v[0][2] + i), w->oz), vf_sub(vf_loadu(w->v[1][0] + i), w->ox),
-            vf_sub(vf_loadu(w->v[1][1] + i), w->oy), vf_sub(vf_loadu(w->v[1][2] + i), w->oz),
-            vf_sub(vf_loadu(w->v[2][0] + i), w->ox), vf_sub(vf_loadu(w->v[2][1] + i), w->oy),
-            vf_sub(vf_loadu(w->v[2][2] + i), w->oz), w->sx, w->sy, w->sz, w->tnear, tfar, live,
-            want_uv);
-    return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, vf_loadu(w->v[0][0] + i),
-                       vf_loadu(w->v[0][1] + i), vf_loadu(w->v[0][2] + i), vf_loadu(w->v[1][0] + i),
-                       vf_loadu(w->v[1][1] + i), vf_loadu(w->v[1][2] + i), vf_loadu(w->v[2][0] + i),
-                       vf_loadu(w->v[2][1] + i), vf_loadu(w->v[2][2] + i), w->tnear, tfar, live,
-                       want_uv);
+        return watertight_core(vf_sub(v[0][0], w->ox), vf_sub(v[0][1], w->oy), vf_sub(v[0][2], w->oz),
+                               vf_sub(v[1][0], w->ox), vf_sub(v[1][1], w->oy), vf_sub(v[1][2], w->oz),
+                               vf_sub(v[2][0], w->ox), vf_sub(v[2][1], w->oy), vf_sub(v[2][2], w->oz),
+                               w->sx, w->sy, w->sz, w->tnear, tfar, live, want_uv);
+    return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, v[0][0], v[0][1], v[0][2], v[1][0],
+                       v[1][1], v[1][2], v[2][0], v[2][1], v[2][2], w->tnear, tfar, live, want_uv);
 }
 
 /* Closest hit: the ray's tfar shrinks to the best t so far, so later
