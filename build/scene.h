@@ -58,6 +58,14 @@ typedef struct lanes_scene {
     lanes_area_light *area_lights;
     size_t area_light_count;
     lanes_camera camera;
+    /* Allocated lengths (in elements) of the arrays above, kept by the
+     * append helpers below so appending is amortized O(1). A scene filled
+     * by hand may leave them 0: the helpers then reallocate on the next
+     * append, so the arrays must come from malloc. */
+    size_t triangle_capacity;
+    size_t material_capacity;
+    size_t point_light_capacity;
+    size_t area_light_capacity;
 } lanes_scene;
 
 /* Errors from loaders: which file, which line (0: none), what is wrong. */
@@ -65,9 +73,88 @@ typedef struct lanes_error {
     char message[512];
 } lanes_error;
 
+/* Triangle indices are uint32_t throughout (material_of, BVH prim_index), and
+ * a scene this large would need 72 GiB of vertices anyway. */
+#define LANES_SCENE_MAX_TRIANGLES ((size_t)1 << 31)
+
+/* Formats err->message like snprintf (truncated to fit). err may be NULL. */
+void lanes_error_set(lanes_error *err, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* An empty scene: no arrays, a camera at (0,0,5) looking at the origin, 45
+ * degrees, 512x512 (the thesis' image size). */
+void lanes_scene_init(lanes_scene *scene);
+
+/* Frees the arrays and leaves the scene as lanes_scene_init does. Safe on a
+ * zeroed or already freed scene. */
 void lanes_scene_free(lanes_scene *scene);
 
-/* Scene bounds over all triangle vertices. */
+/* Scene bounds over all triangle vertices. Non-finite coordinates are
+ * skipped; with no finite vertex, min = +inf and max = -inf. */
 void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3]);
+
+/* Append helpers. They grow the arrays geometrically with overflow-checked
+ * sizes, refuse more than LANES_SCENE_MAX_TRIANGLES triangles, and on
+ * failure leave the scene unchanged and return false with a message. */
+bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err);
+bool lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
+                              lanes_error *err);
+/* *index (may be NULL) receives the new material's index. Names must be
+ * unique within a scene. */
+bool lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
+                              lanes_error *err);
+bool lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l,
+                                 lanes_error *err);
+bool lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err);
+/* Index of the material called `name`, or -1. */
+long lanes_scene_find_material(const lanes_scene *scene, const char *name);
+
+/* Points the camera (keeping its fov and size) at the center of the bounds
+ * from +z and a little above, far enough for the bounding sphere to fit. */
+void lanes_scene_frame_camera(lanes_scene *scene);
+
+/* Checks what every consumer relies on: finite vertices, material indices
+ * in range, finite non-negative colors, ior > 0 for glass, a usable camera
+ * (finite, eye != target, up not parallel to the view, 0 < fov < 180,
+ * positive size). */
+bool lanes_scene_validate(const lanes_scene *scene, lanes_error *err);
+
+/* An indexed triangle mesh, as read from a file or generated, before it is
+ * placed in a scene (the same mesh may be placed several times). */
+typedef struct lanes_mesh {
+    float *positions;  /* xyz per vertex */
+    uint32_t *indices; /* three vertex indices per triangle, all < vertex_count */
+    size_t vertex_count;
+    size_t triangle_count;
+} lanes_mesh;
+
+void lanes_mesh_free(lanes_mesh *mesh);
+
+/* A 3x4 affine transform, row-major: p' = M[0..2][0..2] p + M[0..2][3]. */
+typedef struct lanes_xform {
+    double m[3][4];
+} lanes_xform;
+
+void lanes_xform_identity(lanes_xform *x);
+/* out = a * b (apply b first); out may alias a or b. */
+void lanes_xform_mul(lanes_xform *out, const lanes_xform *a, const lanes_xform *b);
+/* translate(t) * rotate * scale(s), the usual object placement. rotate may
+ * be NULL (no rotation). */
+void lanes_xform_trs(lanes_xform *out, const double t[3], const lanes_xform *rotate,
+                     const double s[3]);
+/* Rotation about a (not necessarily unit) axis, angle in degrees. */
+void lanes_xform_rotation(lanes_xform *out, const double axis[3], double degrees);
+/* out may alias in. */
+void lanes_xform_apply(const lanes_xform *x, const float in[3], float out[3]);
+
+/* Appends the mesh's triangles, transformed by xf (NULL: identity), all with
+ * material `material` (which must exist). Fails on non-finite transformed
+ * vertices or out-of-range indices, naming `what` (e.g. the file) in the
+ * message; the scene is then unchanged. */
+bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
+                          uint32_t material, const char *what, lanes_error *err);
 
 #endif

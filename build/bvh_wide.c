@@ -1,0 +1,215 @@
+/* Wide BVHs collapsed from the binary one (Dammertz et al. 2008's MBVH
+ * collapse, opening the largest child first as Wald et al. 2008 and Embree
+ * do): a wide node starts from the two children of a BVH2 node and opens
+ * the interior child of largest surface area, the one a random ray is most
+ * likely to enter, until it has `width` children or only leaves remain.
+ *
+ * Two passes: the first decides the slots of every node (which BVH2 node
+ * each slot holds), so the node count is known before the
+ * SoA arrays, 32 * width bytes per node, are allocated; the second writes
+ * those arrays.
+ *
+ * Compiled for the x86-64 baseline. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "build/bvh.h"
+#include "build/bvh_alloc.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Double: float extents of huge boxes overflow, and inf * 0 would make a
+ * child unopenable. */
+static double node_area(const lanes_bvh2_node *n)
+{
+    double dx = (double)n->max[0] - n->min[0], dy = (double)n->max[1] - n->min[1],
+           dz = (double)n->max[2] - n->min[2];
+    if (!(dx >= 0.0 && dy >= 0.0 && dz >= 0.0)) return 0.0;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+void lanes_wbvh_free(lanes_wbvh *w)
+{
+    if (!w) return;
+    free(w->bounds);
+    free(w->child);
+    free(w->count);
+    memset(w, 0, sizeof *w);
+}
+
+static bool fail(lanes_error *err, const char *msg)
+{
+    if (err) snprintf(err->message, sizeof err->message, "wide bvh: %s", msg);
+    return false;
+}
+
+bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err)
+{
+    double t0 = now_seconds();
+    if (!out) return fail(err, "no output");
+    memset(out, 0, sizeof *out);
+    if (width != 4 && width != 8 && width != 16) return fail(err, "width must be 4, 8 or 16");
+    if (!bvh || !bvh->nodes || bvh->node_count == 0) return fail(err, "empty BVH2");
+    const lanes_bvh2_node *nd = bvh->nodes;
+    const size_t nn = bvh->node_count;
+    const size_t W = (size_t)width;
+
+    /* Pass 1. roots[i]: the BVH2 node wide node i stands for; slot[i*W+j]:
+     * the BVH2 node in slot j (UINT32_MAX: empty); wchild: the wide index
+     * of interior slots. Every wide node but the root stands for a distinct
+     * interior BVH2 node, and a well-formed BVH2 of nn nodes has
+     * (nn - 1) / 2 of them (two children each), which bounds the count.
+     * A node's interior children get consecutive indices when it is
+     * processed, and nodes are processed depth first from a stack: that
+     * follows the BVH2's depth-first layout, where breadth first order
+     * would jump around the BVH2 node array. */
+    const size_t cap = (nn - 1) / 2 + 1;
+    uint32_t *roots = lanes_big_alloc(cap, sizeof *roots);
+    uint32_t *stack = lanes_big_alloc(cap, sizeof *stack);
+    uint32_t *slot = lanes_big_alloc(cap * W, sizeof *slot);
+    uint32_t *wchild = lanes_big_alloc(cap * W, sizeof *wchild);
+    bool ok = roots && stack && slot && wchild;
+    const char *why = "out of memory";
+    size_t count = 1, sp = 0;
+    if (ok) {
+        roots[0] = 0;
+        stack[sp++] = 0;
+    }
+    while (ok && sp > 0) {
+        size_t i = stack[--sp];
+        size_t first_new = count;
+        uint32_t s[16];
+        double area[16]; /* of interior slots; -1 for leaves */
+        int m = 0;
+        const lanes_bvh2_node *r = &nd[roots[i]];
+        if (r->count > 0) {
+            s[m++] = roots[i];
+        } else {
+            if (r->first >= nn - 1) {
+                ok = false;
+                why = "malformed BVH2: child index out of range";
+                break;
+            }
+            for (int j = 0; j < 2; j++) {
+                s[m] = r->first + (uint32_t)j;
+                area[m] = nd[s[m]].count > 0 ? -1.0 : node_area(&nd[s[m]]);
+                m++;
+            }
+            while (m < width) {
+                int best = -1;
+                double best_area = -1.0;
+                for (int j = 0; j < m; j++)
+                    if (area[j] > best_area) {
+                        best_area = area[j];
+                        best = j;
+                    }
+                if (best < 0) break;
+                uint32_t o = s[best];
+                if (nd[o].first >= nn - 1) {
+                    ok = false;
+                    why = "malformed BVH2: child index out of range";
+                    break;
+                }
+                memmove(&s[best + 2], &s[best + 1], (size_t)(m - best - 1) * sizeof s[0]);
+                memmove(&area[best + 2], &area[best + 1], (size_t)(m - best - 1) * sizeof area[0]);
+                for (int j = 0; j < 2; j++) {
+                    s[best + j] = nd[o].first + (uint32_t)j;
+                    area[best + j] = nd[s[best + j]].count > 0 ? -1.0 : node_area(&nd[s[best + j]]);
+                }
+                m++;
+            }
+        }
+        for (int j = 0; ok && j < width; j++) {
+            size_t k = i * W + (size_t)j;
+            if (j >= m) {
+                slot[k] = UINT32_MAX;
+                wchild[k] = LANES_WBVH_EMPTY;
+                continue;
+            }
+            slot[k] = s[j];
+            const lanes_bvh2_node *c = &nd[s[j]];
+            if (c->count > 0) {
+                if (c->first > bvh->prim_count || c->count > bvh->prim_count - c->first) {
+                    ok = false;
+                    why = "malformed BVH2: leaf range out of range";
+                }
+                wchild[k] = c->first;
+                continue;
+            }
+            if (count == cap) {
+                ok = false;
+                why = "malformed BVH2: more interior nodes than (nodes - 1) / 2";
+                break;
+            }
+            wchild[k] = (uint32_t)count;
+            roots[count++] = s[j];
+        }
+        for (size_t c = count; ok && c-- > first_new;) stack[sp++] = (uint32_t)c;
+    }
+
+    /* Pass 2. */
+    if (ok) {
+        out->width = width;
+        out->node_count = count;
+        out->bounds = lanes_big_alloc(count * 6 * W, sizeof(float));
+        out->child = lanes_big_alloc(count * W, sizeof(uint32_t));
+        out->count = lanes_big_alloc(count * W, sizeof(uint32_t));
+        ok = out->bounds && out->child && out->count;
+    }
+    double sah = 0.0, root_area = 0.0;
+    const double ct = bvh->traversal_cost, ci = bvh->intersect_cost;
+    for (size_t i = 0; ok && i < count; i++) {
+        float *b = out->bounds + i * 6 * W;
+        float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+        for (size_t j = 0; j < W; j++) {
+            size_t k = i * W + j;
+            uint32_t s = slot[k];
+            if (s == UINT32_MAX) {
+                for (int p = 0; p < 3; p++) {
+                    b[p * W + j] = INFINITY;
+                    b[(p + 3) * W + j] = -INFINITY;
+                }
+                out->child[k] = LANES_WBVH_EMPTY;
+                out->count[k] = 0;
+                continue;
+            }
+            const lanes_bvh2_node *c = &nd[s];
+            for (int p = 0; p < 3; p++) {
+                b[p * W + j] = c->min[p];
+                b[(p + 3) * W + j] = c->max[p];
+                box[p] = c->min[p] < box[p] ? c->min[p] : box[p];
+                box[p + 3] = c->max[p] > box[p + 3] ? c->max[p] : box[p + 3];
+            }
+            out->child[k] = wchild[k];
+            out->count[k] = c->count;
+            if (c->count > 0) sah += ci * c->count * node_area(c);
+        }
+        lanes_bvh2_node u;
+        memcpy(u.min, box, sizeof u.min);
+        memcpy(u.max, box + 3, sizeof u.max);
+        double a = node_area(&u);
+        sah += ct * a;
+        if (i == 0) root_area = a;
+    }
+    free(roots);
+    free(stack);
+    free(slot);
+    free(wchild);
+    if (!ok) {
+        lanes_wbvh_free(out);
+        return fail(err, why);
+    }
+    out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
+    out->collapse_seconds = now_seconds() - t0;
+    return true;
+}

@@ -1,0 +1,437 @@
+/* The scene container: growth, bounds, validation, placing meshes.
+ *
+ * Compiled for the x86-64 baseline. */
+#include "build/scene.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void lanes_error_set(lanes_error *err, const char *fmt, ...)
+{
+    if (!err)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err->message, sizeof err->message, fmt, ap);
+    va_end(ap);
+}
+
+void lanes_scene_init(lanes_scene *scene)
+{
+    memset(scene, 0, sizeof *scene);
+    lanes_camera *c = &scene->camera;
+    c->eye[2] = 5.0f;
+    c->up[1] = 1.0f;
+    c->fov_y_degrees = 45.0f;
+    c->width = 512;
+    c->height = 512;
+}
+
+void lanes_scene_free(lanes_scene *scene)
+{
+    if (!scene)
+        return;
+    free(scene->verts);
+    free(scene->material_of);
+    free(scene->materials);
+    free(scene->point_lights);
+    free(scene->area_lights);
+    lanes_scene_init(scene);
+}
+
+void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3])
+{
+    for (int a = 0; a < 3; a++) {
+        min[a] = INFINITY;
+        max[a] = -INFINITY;
+    }
+    size_t n = scene->triangle_count * 3;
+    for (size_t v = 0; v < n; v++) {
+        const float *p = scene->verts + 3 * v;
+        /* One bad vertex must not turn the bounds into NaN: the camera
+         * framing and the BVH root both derive from them. */
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            continue;
+        for (int a = 0; a < 3; a++) {
+            if (p[a] < min[a])
+                min[a] = p[a];
+            if (p[a] > max[a])
+                max[a] = p[a];
+        }
+    }
+}
+
+/* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
+ * geometric so repeated appends stay linear overall; every size is checked
+ * against SIZE_MAX before multiplying. */
+static bool grow(void **array, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return true;
+    size_t new_cap = *cap < 16 ? 16 : *cap;
+    while (new_cap < need) {
+        if (new_cap > SIZE_MAX / 2) {
+            new_cap = need;
+            break;
+        }
+        new_cap *= 2;
+    }
+    if (new_cap > SIZE_MAX / size)
+        return false;
+    void *p = realloc(*array, new_cap * size);
+    if (!p)
+        return false;
+    *array = p;
+    *cap = new_cap;
+    return true;
+}
+
+bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
+{
+    size_t n = scene->triangle_count;
+    if (extra > LANES_SCENE_MAX_TRIANGLES || n + extra > LANES_SCENE_MAX_TRIANGLES) {
+        lanes_error_set(err, "too many triangles: %zu + %zu exceeds the limit of %zu", n, extra,
+                        LANES_SCENE_MAX_TRIANGLES);
+        return false;
+    }
+    size_t need = n + extra;
+    if (need <= scene->triangle_capacity)
+        return true;
+    /* Both arrays share one capacity; grow a copy of it for each so a
+     * failure halfway leaves triangle_capacity describing both. */
+    size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;
+    void *v = scene->verts, *m = scene->material_of;
+    bool ok = grow(&v, &cap_v, need, 9 * sizeof(float));
+    scene->verts = v;
+    if (ok) {
+        ok = grow(&m, &cap_m, need, sizeof(uint32_t));
+        scene->material_of = m;
+    }
+    if (!ok) {
+        lanes_error_set(err, "out of memory for %zu triangles", need);
+        return false;
+    }
+    scene->triangle_capacity = cap_v < cap_m ? cap_v : cap_m;
+    return true;
+}
+
+bool lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
+                              lanes_error *err)
+{
+    if (!lanes_scene_reserve_triangles(scene, 1, err))
+        return false;
+    size_t i = scene->triangle_count++;
+    memcpy(scene->verts + 9 * i, v, 9 * sizeof(float));
+    scene->material_of[i] = material;
+    return true;
+}
+
+long lanes_scene_find_material(const lanes_scene *scene, const char *name)
+{
+    for (size_t i = 0; i < scene->material_count; i++)
+        if (strcmp(scene->materials[i].name, name) == 0)
+            return (long)i;
+    return -1;
+}
+
+bool lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
+                              lanes_error *err)
+{
+    if (memchr(m->name, '\0', sizeof m->name) == NULL) {
+        lanes_error_set(err, "material name is not terminated within %zu bytes", sizeof m->name);
+        return false;
+    }
+    if (lanes_scene_find_material(scene, m->name) >= 0) {
+        lanes_error_set(err, "material '%s' is defined twice", m->name);
+        return false;
+    }
+    if (scene->material_count >= UINT32_MAX) {
+        lanes_error_set(err, "too many materials");
+        return false;
+    }
+    void *p = scene->materials;
+    bool ok = grow(&p, &scene->material_capacity, scene->material_count + 1, sizeof *m);
+    scene->materials = p;
+    if (!ok) {
+        lanes_error_set(err, "out of memory for materials");
+        return false;
+    }
+    if (index)
+        *index = (uint32_t)scene->material_count;
+    scene->materials[scene->material_count++] = *m;
+    return true;
+}
+
+bool lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l, lanes_error *err)
+{
+    void *p = scene->point_lights;
+    bool ok = grow(&p, &scene->point_light_capacity, scene->point_light_count + 1, sizeof *l);
+    scene->point_lights = p;
+    if (!ok) {
+        lanes_error_set(err, "out of memory for lights");
+        return false;
+    }
+    scene->point_lights[scene->point_light_count++] = *l;
+    return true;
+}
+
+bool lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err)
+{
+    void *p = scene->area_lights;
+    bool ok = grow(&p, &scene->area_light_capacity, scene->area_light_count + 1, sizeof *l);
+    scene->area_lights = p;
+    if (!ok) {
+        lanes_error_set(err, "out of memory for lights");
+        return false;
+    }
+    scene->area_lights[scene->area_light_count++] = *l;
+    return true;
+}
+
+void lanes_scene_frame_camera(lanes_scene *s)
+{
+    float mn[3], mx[3];
+    lanes_scene_bounds(s, mn, mx);
+    double ctr[3], r = 0.0;
+    for (int a = 0; a < 3; a++) {
+        ctr[a] = 0.5 * ((double)mn[a] + mx[a]);
+        r += 0.25 * ((double)mx[a] - mn[a]) * ((double)mx[a] - mn[a]);
+    }
+    r = sqrt(r);
+    if (!(r > 0.0))
+        r = 1.0;
+    lanes_camera *k = &s->camera;
+    double dist = r / sin(0.5 * k->fov_y_degrees * 3.14159265358979323846 / 180.0) * 1.05;
+    double dir[3] = {0.0, 0.35, 1.0}, l = sqrt(dir[1] * dir[1] + 1.0);
+    for (int a = 0; a < 3; a++) {
+        k->target[a] = (float)ctr[a];
+        k->eye[a] = (float)(ctr[a] + dist * dir[a] / l);
+    }
+    k->up[0] = k->up[2] = 0.0f;
+    k->up[1] = 1.0f;
+}
+
+static bool finite3(const float v[3])
+{
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+static bool color_ok(const float c[3])
+{
+    return finite3(c) && c[0] >= 0.0f && c[1] >= 0.0f && c[2] >= 0.0f;
+}
+
+bool lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
+{
+    const char *name = scene->name[0] ? scene->name : "scene";
+    if (scene->triangle_count == 0) {
+        lanes_error_set(err, "%s: no triangles", name);
+        return false;
+    }
+    if (scene->triangle_count > LANES_SCENE_MAX_TRIANGLES) {
+        lanes_error_set(err, "%s: %zu triangles exceed the limit", name, scene->triangle_count);
+        return false;
+    }
+    for (size_t i = 0; i < scene->material_count; i++) {
+        const lanes_material *m = &scene->materials[i];
+        if (memchr(m->name, '\0', sizeof m->name) == NULL) {
+            lanes_error_set(err, "%s: material %zu: name not terminated", name, i);
+            return false;
+        }
+        bool ok = (int)m->kind >= LANES_MAT_DIFFUSE && (int)m->kind <= LANES_MAT_EMISSIVE &&
+                  color_ok(m->color) && color_ok(m->emission);
+        if (m->kind == LANES_MAT_GLASS)
+            ok = ok && isfinite(m->ior) && m->ior > 0.0f;
+        if (!ok) {
+            lanes_error_set(err, "%s: material '%s' has an invalid kind, color, emission or ior",
+                            name, m->name);
+            return false;
+        }
+    }
+    for (size_t i = 0; i < scene->triangle_count; i++) {
+        if (scene->material_of[i] >= scene->material_count) {
+            lanes_error_set(err, "%s: triangle %zu has material %u of %zu", name, i,
+                            scene->material_of[i], scene->material_count);
+            return false;
+        }
+        const float *v = scene->verts + 9 * i;
+        if (!finite3(v) || !finite3(v + 3) || !finite3(v + 6)) {
+            lanes_error_set(err, "%s: triangle %zu has a non-finite vertex", name, i);
+            return false;
+        }
+    }
+    for (size_t i = 0; i < scene->point_light_count; i++) {
+        const lanes_point_light *l = &scene->point_lights[i];
+        if (!finite3(l->position) || !color_ok(l->intensity)) {
+            lanes_error_set(err, "%s: point light %zu: non-finite position or invalid intensity",
+                            name, i);
+            return false;
+        }
+    }
+    for (size_t i = 0; i < scene->area_light_count; i++) {
+        const lanes_area_light *l = &scene->area_lights[i];
+        if (!finite3(l->corner) || !finite3(l->edge_u) || !finite3(l->edge_v) ||
+            !color_ok(l->emission)) {
+            lanes_error_set(err, "%s: area light %zu: non-finite geometry or invalid emission",
+                            name, i);
+            return false;
+        }
+    }
+    const lanes_camera *c = &scene->camera;
+    double f[3], cr[3];
+    for (int a = 0; a < 3; a++)
+        f[a] = (double)c->target[a] - c->eye[a];
+    cr[0] = f[1] * c->up[2] - f[2] * c->up[1];
+    cr[1] = f[2] * c->up[0] - f[0] * c->up[2];
+    cr[2] = f[0] * c->up[1] - f[1] * c->up[0];
+    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    double ul = sqrt((double)c->up[0] * c->up[0] + (double)c->up[1] * c->up[1] +
+                     (double)c->up[2] * c->up[2]);
+    double cl = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+    if (!finite3(c->eye) || !finite3(c->target) || !finite3(c->up) || !(fl > 0.0) ||
+        !(cl > 1e-6 * fl * ul)) {
+        lanes_error_set(err,
+                        "%s: camera: eye, target and up must be finite, eye != target, "
+                        "and up not parallel to the view direction",
+                        name);
+        return false;
+    }
+    if (!(c->fov_y_degrees > 0.0f && c->fov_y_degrees < 180.0f) || c->width <= 0 ||
+        c->height <= 0) {
+        lanes_error_set(err, "%s: camera: fov must be in (0, 180) and the size positive", name);
+        return false;
+    }
+    return true;
+}
+
+void lanes_mesh_free(lanes_mesh *mesh)
+{
+    if (!mesh)
+        return;
+    free(mesh->positions);
+    free(mesh->indices);
+    memset(mesh, 0, sizeof *mesh);
+}
+
+void lanes_xform_identity(lanes_xform *x)
+{
+    memset(x, 0, sizeof *x);
+    x->m[0][0] = x->m[1][1] = x->m[2][2] = 1.0;
+}
+
+void lanes_xform_mul(lanes_xform *out, const lanes_xform *a, const lanes_xform *b)
+{
+    lanes_xform r;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 4; j++) {
+            double s = j == 3 ? a->m[i][3] : 0.0;
+            for (int k = 0; k < 3; k++)
+                s += a->m[i][k] * b->m[k][j];
+            r.m[i][j] = s;
+        }
+    }
+    *out = r;
+}
+
+void lanes_xform_trs(lanes_xform *out, const double t[3], const lanes_xform *rotate,
+                     const double s[3])
+{
+    lanes_xform r;
+    if (rotate)
+        r = *rotate;
+    else
+        lanes_xform_identity(&r);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++)
+            r.m[i][j] *= s[j];
+        r.m[i][3] = t[i];
+    }
+    *out = r;
+}
+
+void lanes_xform_rotation(lanes_xform *out, const double axis[3], double degrees)
+{
+    lanes_xform_identity(out);
+    double len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    if (!(len > 0.0))
+        return;
+    double x = axis[0] / len, y = axis[1] / len, z = axis[2] / len;
+    double a = degrees * (3.14159265358979323846 / 180.0);
+    double c = cos(a), s = sin(a), t = 1.0 - c;
+    out->m[0][0] = t * x * x + c;
+    out->m[0][1] = t * x * y - s * z;
+    out->m[0][2] = t * x * z + s * y;
+    out->m[1][0] = t * x * y + s * z;
+    out->m[1][1] = t * y * y + c;
+    out->m[1][2] = t * y * z - s * x;
+    out->m[2][0] = t * x * z - s * y;
+    out->m[2][1] = t * y * z + s * x;
+    out->m[2][2] = t * z * z + c;
+}
+
+void lanes_xform_apply(const lanes_xform *x, const float in[3], float out[3])
+{
+    double p[3] = {in[0], in[1], in[2]};
+    for (int i = 0; i < 3; i++)
+        out[i] = (float)(x->m[i][0] * p[0] + x->m[i][1] * p[1] + x->m[i][2] * p[2] + x->m[i][3]);
+}
+
+bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
+                          uint32_t material, const char *what, lanes_error *err)
+{
+    if (!what)
+        what = "mesh";
+    if (material >= scene->material_count) {
+        lanes_error_set(err, "%s: material index %u does not exist (%zu materials)", what, material,
+                        scene->material_count);
+        return false;
+    }
+    lanes_error sub;
+    if (!lanes_scene_reserve_triangles(scene, mesh->triangle_count, &sub)) {
+        lanes_error_set(err, "%s: %s", what, sub.message);
+        return false;
+    }
+    /* Transform each vertex once, not once per triangle using it. */
+    float *tv = NULL;
+    if (mesh->vertex_count > 0) {
+        if (mesh->vertex_count > SIZE_MAX / (3 * sizeof(float)) ||
+            !(tv = malloc(mesh->vertex_count * 3 * sizeof(float)))) {
+            lanes_error_set(err, "%s: out of memory for %zu vertices", what, mesh->vertex_count);
+            return false;
+        }
+    }
+    for (size_t v = 0; v < mesh->vertex_count; v++) {
+        float *o = tv + 3 * v;
+        if (xf)
+            lanes_xform_apply(xf, mesh->positions + 3 * v, o);
+        else
+            memcpy(o, mesh->positions + 3 * v, 3 * sizeof(float));
+        if (!finite3(o)) {
+            lanes_error_set(err, "%s: vertex %zu is not finite%s", what, v,
+                            finite3(mesh->positions + 3 * v) ? " after the transform" : "");
+            free(tv);
+            return false;
+        }
+    }
+    float *dst = scene->verts + 9 * scene->triangle_count;
+    uint32_t *mdst = scene->material_of + scene->triangle_count;
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        for (int k = 0; k < 3; k++) {
+            uint32_t i = mesh->indices[3 * t + k];
+            if (i >= mesh->vertex_count) {
+                lanes_error_set(err, "%s: triangle %zu refers to vertex %u of %zu", what, t, i,
+                                mesh->vertex_count);
+                free(tv);
+                return false;
+            }
+            memcpy(dst + 9 * t + 3 * k, tv + 3 * (size_t)i, 3 * sizeof(float));
+        }
+        mdst[t] = material;
+    }
+    scene->triangle_count += mesh->triangle_count;
+    free(tv);
+    return true;
+}

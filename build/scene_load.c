@@ -1,0 +1,78 @@
+/* The scene argument: built-in name, scene file or mesh file.
+ *
+ * Compiled for the x86-64 baseline. */
+#define _POSIX_C_SOURCE 200809L /* stat */
+
+#include "build/scene_load.h"
+
+#include "build/mesh_import.h"
+#include "build/scene_file.h"
+#include "build/scenes_builtin.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+static bool ends_with_ci(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcasecmp(s + n - k, suffix) == 0;
+}
+
+static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
+{
+    lanes_scene_init(out);
+    const char *slash = strrchr(path, '/');
+    snprintf(out->name, sizeof out->name, "%s", slash ? slash + 1 : path);
+    lanes_material grey;
+    memset(&grey, 0, sizeof grey);
+    snprintf(grey.name, sizeof grey.name, "default");
+    grey.kind = LANES_MAT_DIFFUSE;
+    grey.color[0] = grey.color[1] = grey.color[2] = 0.8f;
+    grey.ior = 1.5f;
+    uint32_t mat;
+    if (!lanes_scene_add_material(out, &grey, &mat, err) ||
+        !lanes_mesh_import(out, path, NULL, mat, err)) {
+        lanes_scene_free(out);
+        return false;
+    }
+    lanes_scene_frame_camera(out);
+    /* A light over the viewer's shoulder, bright enough that the mesh is
+     * lit at about unit irradiance whatever its size. */
+    lanes_camera *c = &out->camera;
+    double d2 = 0.0;
+    for (int a = 0; a < 3; a++)
+        d2 += ((double)c->eye[a] - c->target[a]) * ((double)c->eye[a] - c->target[a]);
+    double up = 0.5 * sqrt(d2);
+    lanes_point_light l = {{c->eye[0] + (float)up, c->eye[1] + (float)up, c->eye[2]},
+                           {(float)(1.5 * d2), (float)(1.5 * d2), (float)(1.5 * d2)}};
+    if (!lanes_scene_add_point_light(out, &l, err) || !lanes_scene_validate(out, err)) {
+        lanes_scene_free(out);
+        return false;
+    }
+    return true;
+}
+
+bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
+{
+    if (!spec || !*spec)
+        return lanes_builtin_scene("default", out, err);
+    for (size_t i = 0; i < lanes_builtin_scene_count(); i++)
+        if (strcmp(spec, lanes_builtin_scene_info(i)->name) == 0)
+            return lanes_builtin_scene(spec, out, err);
+    if (ends_with_ci(spec, ".json"))
+        return lanes_scene_file_load(spec, out, err);
+    struct stat st;
+    if (stat(spec, &st) != 0) {
+        lanes_scene_init(out);
+        if (errno == ENOENT && !strchr(spec, '/') && !strchr(spec, '.'))
+            /* A bare word: most likely a mistyped scene name. */
+            return lanes_builtin_scene(spec, out, err);
+        lanes_error_set(err, "%s: %s", spec, errno == ENOENT ? "no such file" : strerror(errno));
+        return false;
+    }
+    return mesh_scene(spec, out, err);
+}
