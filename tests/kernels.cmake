@@ -1,0 +1,51 @@
+# Correctness tests of the kernels and of the SIMD layer (label "kernels").
+# Included from tests/CMakeLists.txt.
+#
+#   ctest --test-dir out -L kernels -j2
+#
+# test_kernels: every kernel of every set this CPU runs against the
+# double-precision references in reference.c, and the sets against each
+# other. One ctest entry per family, so that ctest -j2 keeps both cores busy;
+# each runs all sets in one process, because the cross-set comparisons need
+# every set's results. `test_kernels --quick` (10^4 cases per kernel) is
+# for emulators.
+add_executable(test_kernels
+  ${CMAKE_CURRENT_LIST_DIR}/test_kernels.c
+  ${CMAKE_CURRENT_LIST_DIR}/test_kernels_box.c
+  ${CMAKE_CURRENT_LIST_DIR}/test_kernels_tri.c
+  ${CMAKE_CURRENT_LIST_DIR}/test_kernels_frustum.c
+  ${CMAKE_CURRENT_LIST_DIR}/reference.c)
+target_link_libraries(test_kernels PRIVATE lanes)
+target_include_directories(test_kernels PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+
+set(lanes_kernel_tests "")
+foreach(family IN ITEMS meta prepare box tri_moller tri_watertight frustum)
+  add_test(NAME kernels.${family} COMMAND test_kernels --family ${family})
+  list(APPEND lanes_kernel_tests kernels.${family})
+endforeach()
+
+# test_simd_ops: the SIMD layer, compiled once per kernel set exactly as the
+# kernels are (same flags, same LANES_KSET_<SET> macro, same helper). The
+# helper sets LANES_KERNEL_OBJECTS in this scope; the library's list must not
+# be replaced by the tests' for whoever reads it after this file.
+set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
+lanes_add_kernel_sets(test_simd_ops_set
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops_set.c
+  SETS ${LANES_BUILT_ISAS})
+set(lanes_simd_test_objects "${LANES_KERNEL_OBJECTS}")
+set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
+foreach(isa IN LISTS LANES_BUILT_ISAS)
+  target_include_directories(test_simd_ops_set_${isa} PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+endforeach()
+add_executable(test_simd_ops ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops.c ${lanes_simd_test_objects})
+target_compile_definitions(test_simd_ops PRIVATE ${LANES_HAVE_DEFS})
+target_link_libraries(test_simd_ops PRIVATE lanes)
+target_include_directories(test_simd_ops PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+add_test(NAME kernels.simd_ops COMMAND test_simd_ops)
+list(APPEND lanes_kernel_tests kernels.simd_ops)
+
+# The tests pick their sets themselves: the environment of whoever runs
+# ctest must not narrow them.
+set_tests_properties(${lanes_kernel_tests} PROPERTIES
+  LABELS kernels TIMEOUT 600
+  ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")

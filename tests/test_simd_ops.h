@@ -1,0 +1,40 @@
+/* The interface between test_simd_ops.c (the baseline driver) and
+ * test_simd_ops_set.c (compiled once per kernel set). The per-set code only
+ * computes and compares; reporting, counting and the guard pages live in
+ * the driver, which is compiled for the x86-64 baseline. */
+#ifndef LANES_TESTS_TEST_SIMD_OPS_H
+#define LANES_TESTS_TEST_SIMD_OPS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct simd_ctx {
+    const char *isa;  /* the set being tested */
+    const char *op;   /* the operation being tested */
+    long op_fails;
+    long passed, failed, skipped; /* (set, op) groups */
+    int max_print;
+    uint64_t seed;
+    /* The last floats of a readable and writable page; the next page is
+     * inaccessible. Masked loads and stores and compress stores there must
+     * not touch the inactive lanes' memory. */
+    float *page_end;
+    size_t page_floats;
+} simd_ctx;
+
+/* Begin and end a (set, op) group; failures in between are counted, the
+ * first max_print of each group printed. */
+void simd_begin(simd_ctx *c, const char *op);
+void simd_fail(simd_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void simd_end(simd_ctx *c);
+
+/* One per compiled set, defined by test_simd_ops_set.c with the set's suffix. */
+void test_simd_ops_run_scalar(simd_ctx *c);
+void test_simd_ops_run_sse4(simd_ctx *c);
+void test_simd_ops_run_avx(simd_ctx *c);
+void test_simd_ops_run_avx2(simd_ctx *c);
+void test_simd_ops_run_avx512emu(simd_ctx *c);
+void test_simd_ops_run_avx512(simd_ctx *c);
+
+#endif
