@@ -63,6 +63,8 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
             po.base.height = h;
         } else if (cli_flag(&a, "--no-frustum")) {
             no_frustum = true;
+        } else if (cli_flag(&a, "--leaf-frustum")) {
+            po.leaf_frustum = true;
         } else if (cli_global_option(&a)) {
         } else if (a.argv[a.i][0] != '-' && !scene_spec) {
             scene_spec = a.argv[a.i];
@@ -157,6 +159,7 @@ const cli_command cli_cmd_render = {
              "  --queue-min N         queue nodes hold at least N triangles (default 1024)\n"
              "  --packet N            rays per packet, at most 1024 (default 1024)\n"
              "  --no-frustum          packets without frustum culling\n"
+             "  --leaf-frustum        rebuild a frustum from the live rays at each leaf (Wu 2.2.3)\n"
              "  --algo A              triangle test: moller (default), watertight\n"
              "  --spp N               samples per pixel (default 1)\n"
              "  --size WxH            image size (default: the scene camera's)\n"

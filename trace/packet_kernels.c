@@ -17,6 +17,12 @@
 #include "trace/triangle_core.h"
 
 #define MAX_GROUPS ((LANES_PACKET_MAX_RAYS + LANES_W - 1) / LANES_W)
+/* Below this many groups a node is tested group by group, without the
+ * packet frustum. Instructions executed in the packet traversal of the
+ * dragon scene's primary and shadow packets at avx2 (callgrind): frustum at
+ * every node 1.13e9, none 0.95e9; from 4 groups 1.03e9, 16: 0.91e9,
+ * 64: 0.89e9, 256: 0.94e9. */
+#define FRUSTUM_MIN_GROUPS 32
 /* The builder bounds the BVH2 depth by 64. */
 #define MAX_DEPTH 66
 
@@ -199,7 +205,10 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
         uint16_t *out = s.masks[e.depth + 1 < MAX_DEPTH ? e.depth + 1 : MAX_DEPTH - 1];
         lanes_box box = {{nd->min[0], nd->min[1], nd->min[2]}, {nd->max[0], nd->max[1], nd->max[2]}};
 
-        if (opt->frustum && frustum_culls_box(opt->frustum, nd)) {
+        /* The frustum test costs about as much as a few group tests: with
+         * fewer groups left, testing them directly is cheaper. */
+        uint32_t groups_here = ranged ? e.last - e.ia + 1 : e.ia;
+        if (opt->frustum && groups_here >= FRUSTUM_MIN_GROUPS && frustum_culls_box(opt->frustum, nd)) {
             if (stats) stats->frustum_culled++;
             continue;
         }
