@@ -76,7 +76,7 @@ static inline bool corner_rays_hit(const lanes_frustum *f, const lanes_bvh2_node
             tin = tn > tin ? tn : tin;
             tout = tf < tout ? tf : tout;
         }
-        if (!(tin <= tout)) return false;
+        if (!(tin <= tout * LANES_ROBUST_SCALE)) return false;
     }
     return true;
 }
@@ -224,7 +224,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, first, in[first], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                if (vm_any(box_vs_rays(&r, &box, &entry))) {
+                if (vm_any(box_vs_rays(&r, &box, &entry, true))) {
                     found = true;
                     break;
                 }
@@ -234,7 +234,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, last, in[last], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                if (vm_any(box_vs_rays(&r, &box, &entry))) break;
+                if (vm_any(box_vs_rays(&r, &box, &entry, true))) break;
             }
             for (uint32_t g = first; g <= last; g++) {
                 lanes_vray r = lanes_load_rays(rays, NULL, (size_t)g * LANES_W, n, false, false);
@@ -258,7 +258,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, g, in[g], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                uint32_t m = vm_bits(box_vs_rays(&r, &box, &entry));
+                uint32_t m = vm_bits(box_vs_rays(&r, &box, &entry, true));
                 if (!m) continue;
                 out[g] = (uint16_t)m;
                 live_rays += (uint64_t)__builtin_popcount(m);

@@ -22,7 +22,8 @@ typedef struct {
 
 /* Entry of one ray into the children j .. j+LANES_W-1 of a wide node (slab
  * test as in box_kernels.c: near planes by the ray's octant, NaN slab
- * distances ignored by operand order). */
+ * distances ignored by operand order), with the exit widened by
+ * LANES_ROBUST_SCALE so no box a ray really touches is skipped. */
 typedef struct {
     int near[3], far[3];
     vfloat o[3], rd[3], tnear;
@@ -51,7 +52,7 @@ LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, float tfar, 
             tin = vf_max(vf_mul(vf_sub(vf_load(node + r->near[a] * WIDE_WIDTH + j), r->o[a]), r->rd[a]), tin);
             tout = vf_min(vf_mul(vf_sub(vf_load(node + r->far[a] * WIDE_WIDTH + j), r->o[a]), r->rd[a]), tout);
         }
-        vmask m = vf_le(tin, tout);
+        vmask m = vf_le(tin, vf_mul(tout, vf_set1(LANES_ROBUST_SCALE)));
         vf_storeu(tentry + j, tin);
         bits |= vm_bits(m) << j;
     }
@@ -126,7 +127,7 @@ LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_a
     stack[sp++] = (stack_entry){0, 0, ray->tnear};
     while (sp > 0) {
         stack_entry e = stack[--sp];
-        if (e.t > tfar) continue;
+        if (e.t > tfar * LANES_ROBUST_SCALE) continue;
         if (e.count > 0) {
             if (stats) stats->leaves_visited++;
             if (any) {
@@ -172,7 +173,7 @@ static inline bool box_hit1(const lanes_bvh2_node *nd, const lanes_ray *r, float
         tout = tf < tout ? tf : tout;
     }
     *t = tin;
-    return tin <= tout;
+    return tin <= tout * LANES_ROBUST_SCALE;
 }
 
 LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *ray, bool any,
@@ -189,7 +190,7 @@ LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_
     stack[sp++] = (stack_entry){0, 0, troot};
     while (sp > 0) {
         stack_entry e = stack[--sp];
-        if (e.t > tfar) continue;
+        if (e.t > tfar * LANES_ROBUST_SCALE) continue;
         const lanes_bvh2_node *nd = &b->nodes[e.ref];
         if (nd->count > 0) {
             if (stats) stats->leaves_visited++;

@@ -1,0 +1,1009 @@
+/* `lanes compare`: lanes' single-ray traversals against Embree's query APIs,
+ * on the same rays, the same triangles and the same threads.
+ *
+ * Every figure is a ratio from one run (design.md, "Measuring"): the rays
+ * are generated once, laid out for each engine and API before the clock
+ * starts, and each configuration is timed as the median of --reps runs of
+ * its trace calls alone. Threads take fixed-size chunks of the same ray
+ * array from a shared counter, for both engines alike, each thread pinned
+ * to one CPU and running with FTZ/DAZ set (Embree's requirement, applied
+ * to lanes too so the two see the same floating-point environment). */
+#define _GNU_SOURCE /* pthread_setaffinity_np, CPU_SET */
+#include "bench/cmd_compare.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <embree3/rtcore_config.h>
+
+#include "bench/cli_common.h"
+#include "bench/embree_adapter.h"
+#include "build/bvh.h"
+#include "build/scene.h"
+#include "build/scene_load.h"
+#include "simd/isa.h"
+#include "trace/kernels.h"
+#include "trace/render.h"
+
+enum {
+    MAX_THREADS = 256,
+    /* Work item of the threads: large enough that fetching it costs
+     * nothing, small enough to balance; a multiple of every packet width. */
+    CHUNK = 4096,
+};
+
+typedef enum { KIND_PRIMARY, KIND_SHADOW, KIND_DIFFUSE, KIND_SHUFFLED, KIND_COUNT } ray_kind;
+static const char *const kind_names[KIND_COUNT] = {"primary", "shadow", "diffuse",
+                                                   "diffuse-shuffled"};
+
+/* ---- threads ------------------------------------------------------------ */
+
+typedef void (*work_fn)(void *ctx, size_t begin, size_t end);
+
+struct pool;
+typedef struct {
+    struct pool *p;
+    int index;
+} worker_arg;
+
+/* Persistent pinned workers: creating threads per repetition would time
+ * thread start-up, and an unpinned thread may migrate mid-run. */
+typedef struct pool {
+    int threads;
+    int cpus[MAX_THREADS];
+    pthread_t tid[MAX_THREADS];
+    worker_arg args[MAX_THREADS];
+    pthread_barrier_t start, done;
+    work_fn fn;
+    void *ctx;
+    size_t n;
+    atomic_size_t next;
+    bool quit;
+} pool;
+
+static void pin_self(int cpu)
+{
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpu, &set);
+    pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+}
+
+static void pool_work(pool *p)
+{
+    unsigned csr = lanes_fp_fast_enter();
+    for (;;) {
+        size_t b = atomic_fetch_add(&p->next, CHUNK);
+        if (b >= p->n) break;
+        size_t e = b + CHUNK < p->n ? b + CHUNK : p->n;
+        p->fn(p->ctx, b, e);
+    }
+    lanes_fp_restore(csr);
+}
+
+static void *pool_main(void *arg)
+{
+    worker_arg *w = arg;
+    pool *p = w->p;
+    pin_self(p->cpus[w->index]);
+    for (;;) {
+        pthread_barrier_wait(&p->start);
+        if (p->quit) break;
+        pool_work(p);
+        pthread_barrier_wait(&p->done);
+    }
+    return NULL;
+}
+
+/* The calling thread is worker 0 and must already be pinned to cpus[0]. */
+static bool pool_start(pool *p, int threads, const int *cpus, int ncpus)
+{
+    memset(p, 0, sizeof *p);
+    p->threads = threads;
+    for (int i = 0; i < threads; i++) p->cpus[i] = cpus[i % ncpus];
+    if (threads == 1) return true;
+    pthread_barrier_init(&p->start, NULL, (unsigned)threads);
+    pthread_barrier_init(&p->done, NULL, (unsigned)threads);
+    for (int i = 1; i < threads; i++) {
+        p->args[i] = (worker_arg){p, i};
+        /* On failure the caller exits: the workers already started are
+         * parked on the barrier and end with the process. */
+        if (pthread_create(&p->tid[i], NULL, pool_main, &p->args[i]) != 0) return false;
+    }
+    return true;
+}
+
+static void pool_stop(pool *p)
+{
+    if (p->threads <= 1) return;
+    p->quit = true;
+    pthread_barrier_wait(&p->start);
+    for (int i = 1; i < p->threads; i++) pthread_join(p->tid[i], NULL);
+    pthread_barrier_destroy(&p->start);
+    pthread_barrier_destroy(&p->done);
+}
+
+/* Seconds from the moment every worker is released to the moment the last
+ * one is done. */
+static double pool_run(pool *p, work_fn fn, void *ctx, size_t n)
+{
+    p->fn = fn;
+    p->ctx = ctx;
+    p->n = n;
+    atomic_store(&p->next, 0);
+    uint64_t t0, t1;
+    if (p->threads == 1) {
+        t0 = cli_now_ns();
+        pool_work(p);
+        t1 = cli_now_ns();
+    } else {
+        /* The clock starts before the workers are released: once they are,
+         * this thread may be preempted while they do all the work. */
+        t0 = cli_now_ns();
+        pthread_barrier_wait(&p->start);
+        pool_work(p);
+        pthread_barrier_wait(&p->done);
+        t1 = cli_now_ns();
+    }
+    return (double)(t1 - t0) * 1e-9;
+}
+
+/* ---- the two engines as work functions --------------------------------- */
+
+typedef struct {
+    const lanes_kernels *k;
+    lanes_scheme scheme;
+    const lanes_bvh2 *bvh2;
+    const lanes_wbvh *wide;
+    const lanes_ray *rays;
+    lanes_hit *hits;
+    uint8_t *occluded;
+    bool occlusion;
+} lanes_job;
+
+static void lanes_work(void *ctx, size_t b, size_t e)
+{
+    const lanes_job *j = ctx;
+    if (j->occlusion) {
+        if (j->scheme == LANES_SCHEME_WIDE)
+            j->k->occluded_wide(j->wide, j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b,
+                                j->occluded + b, NULL);
+        else
+            j->k->occluded_bvh2(j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->occluded + b,
+                                NULL);
+    } else {
+        if (j->scheme == LANES_SCHEME_WIDE)
+            j->k->trace_wide(j->wide, j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->hits + b,
+                             NULL);
+        else
+            j->k->trace_bvh2(j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->hits + b, NULL);
+    }
+}
+
+typedef struct {
+    const lanes_embree *e;
+    lanes_embree_batch *batch;
+    bool coherent;
+} embree_job;
+
+static void embree_work(void *ctx, size_t b, size_t e)
+{
+    embree_job *j = ctx;
+    lanes_embree_batch_trace(j->e, j->batch, b, e, j->coherent);
+}
+
+/* ---- rays --------------------------------------------------------------- */
+
+typedef struct {
+    float x, y, z;
+} vec3;
+
+static vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
+static vec3 v3_load(const float *p) { return (vec3){p[0], p[1], p[2]}; }
+static vec3 add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static vec3 sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static vec3 scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
+static float dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static vec3 cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static vec3 normalize(vec3 a)
+{
+    float l = sqrtf(dot(a, a));
+    return l > 0.0f ? scale(a, 1.0f / l) : a;
+}
+
+static uint64_t splitmix(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static float rnd01(uint64_t *s) { return (float)(splitmix(s) >> 40) * 0x1p-24f; }
+
+static lanes_ray make_ray(vec3 o, vec3 d, float tnear, float tfar)
+{
+    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
+    lanes_ray_prepare(&r);
+    return r;
+}
+
+/* Bits 0, 2, 4 of m (the x of a Morton index within an 8x8 tile). */
+static int morton_x(int m) { return (m & 1) | ((m >> 1) & 2) | ((m >> 2) & 4); }
+
+/* Camera rays through pixel centres, in 8x8 tiles, Morton order inside a
+ * tile: packets of 4, 16 and 64 consecutive rays are 2x2, 4x4 and 8x8
+ * pixel blocks, the order a packet tracer would use. */
+static lanes_ray *camera_rays(const lanes_scene *s, int w, int h, size_t *count)
+{
+    const lanes_camera *c = &s->camera;
+    vec3 eye = v3_load(c->eye);
+    vec3 fwd = normalize(sub(v3_load(c->target), eye));
+    vec3 right = normalize(cross(fwd, v3_load(c->up)));
+    vec3 up = cross(right, fwd);
+    float aspect = (float)w / (float)h;
+    float tan_half = tanf(c->fov_y_degrees * 3.14159265358979323846f / 360.0f);
+    lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
+    if (!rays) return NULL;
+    size_t n = 0;
+    for (int ty = 0; ty < h; ty += 8)
+        for (int tx = 0; tx < w; tx += 8)
+            for (int m = 0; m < 64; m++) {
+                int x = tx + morton_x(m), y = ty + morton_x(m >> 1);
+                if (x >= w || y >= h) continue;
+                float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
+                float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
+                vec3 d = normalize(add(fwd, add(scale(right, px), scale(up, py))));
+                rays[n++] = make_ray(eye, d, 0.0f, INFINITY);
+            }
+    *count = n;
+    return rays;
+}
+
+/* A primary hit as the secondary rays start from it: the point by its
+ * barycentrics (more accurate than o + t d), the normal facing the ray,
+ * the origin offset along it by a scene-relative epsilon. */
+typedef struct {
+    vec3 origin, n;
+    uint32_t pixel;
+} surface_point;
+
+static surface_point *surface_points(const lanes_scene *s, const lanes_ray *rays,
+                                     const lanes_hit *hits, size_t n, size_t *count)
+{
+    float lo[3], hi[3];
+    lanes_scene_bounds(s, lo, hi);
+    vec3 diag = sub(v3_load(hi), v3_load(lo));
+    float eps = 1e-5f * sqrtf(dot(diag, diag)) + 1e-6f;
+    surface_point *pts = malloc((n ? n : 1) * sizeof *pts);
+    if (!pts) return NULL;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (hits[i].prim == LANES_NO_HIT) continue;
+        const float *v = s->verts + (size_t)hits[i].prim * 9;
+        vec3 v0 = v3_load(v), e1 = sub(v3_load(v + 3), v0), e2 = sub(v3_load(v + 6), v0);
+        vec3 p = add(v0, add(scale(e1, hits[i].u), scale(e2, hits[i].v)));
+        vec3 nrm = normalize(cross(e1, e2));
+        if (dot(nrm, v3_load(rays[i].d)) > 0.0f) nrm = scale(nrm, -1.0f);
+        pts[m++] = (surface_point){add(p, scale(nrm, eps)), nrm, (uint32_t)i};
+    }
+    *count = m;
+    return pts;
+}
+
+/* Towards the first point light, or a point above the scene (along the
+ * camera's up) when there is none; only where the light is in front of the
+ * surface, as a renderer would cast them. */
+static lanes_ray *shadow_rays(const lanes_scene *s, const surface_point *pts, size_t n,
+                              size_t *count)
+{
+    vec3 light;
+    if (s->point_light_count > 0) {
+        light = v3_load(s->point_lights[0].position);
+    } else {
+        float lo[3], hi[3];
+        lanes_scene_bounds(s, lo, hi);
+        vec3 centre = scale(add(v3_load(lo), v3_load(hi)), 0.5f);
+        vec3 diag = sub(v3_load(hi), v3_load(lo));
+        light = add(centre, scale(normalize(v3_load(s->camera.up)), sqrtf(dot(diag, diag))));
+    }
+    lanes_ray *rays = malloc((n ? n : 1) * sizeof *rays);
+    if (!rays) return NULL;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        vec3 to = sub(light, pts[i].origin);
+        float dist = sqrtf(dot(to, to));
+        if (!(dist > 0.0f)) continue;
+        vec3 l = scale(to, 1.0f / dist);
+        if (dot(l, pts[i].n) <= 0.0f) continue;
+        rays[m++] = make_ray(pts[i].origin, l, 0.0f, dist * (1.0f - 1e-4f));
+    }
+    *count = m;
+    return rays;
+}
+
+/* Cosine-weighted about the facing normal; the numbers depend only on the
+ * pixel, so the rays are the same whatever else changes. */
+static lanes_ray *diffuse_rays(const surface_point *pts, size_t n)
+{
+    lanes_ray *rays = malloc((n ? n : 1) * sizeof *rays);
+    if (!rays) return NULL;
+    for (size_t i = 0; i < n; i++) {
+        uint64_t seed = 0x5eed0000ull + pts[i].pixel;
+        float r1 = rnd01(&seed), r2 = rnd01(&seed);
+        vec3 nz = pts[i].n;
+        vec3 a = fabsf(nz.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
+        vec3 nx = normalize(cross(a, nz)), ny = cross(nz, nx);
+        float phi = 6.28318530717958647692f * r1, r = sqrtf(r2);
+        float lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1.0f - r2));
+        vec3 d = normalize(add(add(scale(nx, lx), scale(ny, ly)), scale(nz, lz)));
+        rays[i] = make_ray(pts[i].origin, d, 0.0f, INFINITY);
+    }
+    return rays;
+}
+
+static lanes_ray *shuffled(const lanes_ray *rays, size_t n)
+{
+    lanes_ray *out = malloc((n ? n : 1) * sizeof *out);
+    if (!out) return NULL;
+    memcpy(out, rays, n * sizeof *out);
+    uint64_t seed = 0xd1ce;
+    for (size_t i = n; i > 1; i--) {
+        size_t j = (size_t)(splitmix(&seed) % i);
+        lanes_ray t = out[i - 1];
+        out[i - 1] = out[j];
+        out[j] = t;
+    }
+    return out;
+}
+
+/* ---- results ------------------------------------------------------------ */
+
+typedef struct {
+    ray_kind kind;
+    bool embree;
+    char method[40];
+    char isa[16];
+    int threads;
+    double mrays;
+    double ratio; /* against the best Embree row of the same kind and threads */
+} row;
+
+typedef struct {
+    lanes_isa isa;
+    ray_kind kind;
+    size_t rays, agree;
+    /* why the others differ: two triangles at the same t (ties), a hit
+     * within 1e-4 of a triangle's edge or of the ray's ends (grazing), or
+     * neither */
+    size_t ties, grazing, other;
+} agreement;
+
+typedef struct {
+    row *rows;
+    size_t count, cap;
+    agreement agree[LANES_ISA_COUNT * KIND_COUNT];
+    size_t agree_count;
+} results;
+
+static row *add_row(results *r)
+{
+    if (r->count == r->cap) {
+        size_t cap = r->cap ? 2 * r->cap : 64;
+        row *p = realloc(r->rows, cap * sizeof *p);
+        if (!p) cli_fail("compare: out of memory");
+        r->rows = p;
+        r->cap = cap;
+    }
+    row *w = &r->rows[r->count++];
+    memset(w, 0, sizeof *w);
+    return w;
+}
+
+/* Same primitive and t within 1e-4 relative, or both miss. */
+static bool same_hit(const lanes_hit *a, const lanes_hit *b)
+{
+    if (a->prim != b->prim) return false;
+    if (a->prim == LANES_NO_HIT) return true;
+    return fabsf(a->t - b->t) <= 1e-4f * fmaxf(fabsf(a->t), fabsf(b->t));
+}
+
+/* Barycentric distance from the triangle's boundary of the point where the
+ * ray meets its plane, in double (0 on an edge; +inf when parallel), and
+ * the rounding error a float test makes in it: the vertices relative to the
+ * origin carry an error of about u * (largest coordinate), which dividing
+ * by the determinant (|d| * 2 area * cos) magnifies. A small triangle far
+ * from the origin, seen at a grazing angle, has barycentrics that float
+ * arithmetic cannot resolve to 1e-4. */
+static double edge_distance(const lanes_scene *s, uint32_t prim, const lanes_ray *r, double *err)
+{
+    const float *v = s->verts + (size_t)prim * 9;
+    double e1[3], e2[3], tv[3], p[3], q[3], big = 0.0;
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v[3 + a] - v[a];
+        e2[a] = (double)v[6 + a] - v[a];
+        tv[a] = (double)r->o[a] - v[a];
+        big = fmax(big, fmax(fabs((double)r->o[a]), fmax(fabs((double)v[a]),
+                                                          fmax(fabs((double)v[3 + a]), fabs((double)v[6 + a])))));
+    }
+    p[0] = r->d[1] * e2[2] - (double)r->d[2] * e2[1];
+    p[1] = r->d[2] * e2[0] - (double)r->d[0] * e2[2];
+    p[2] = r->d[0] * e2[1] - (double)r->d[1] * e2[0];
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    *err = INFINITY;
+    if (det == 0.0) return INFINITY;
+    q[0] = tv[1] * e1[2] - tv[2] * e1[1];
+    q[1] = tv[2] * e1[0] - tv[0] * e1[2];
+    q[2] = tv[0] * e1[1] - tv[1] * e1[0];
+    double b1 = (tv[0] * p[0] + tv[1] * p[1] + tv[2] * p[2]) / det;
+    double b2 = (r->d[0] * q[0] + r->d[1] * q[1] + r->d[2] * q[2]) / det;
+    double le = sqrt(fmax(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2],
+                          e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]));
+    double ld = sqrt((double)r->d[0] * r->d[0] + (double)r->d[1] * r->d[1] + (double)r->d[2] * r->d[2]);
+    *err = 8.0 * 0x1p-24 * big * le * ld / fabs(det);
+    return fmin(fabs(1.0 - b1 - b2), fmin(fabs(b1), fabs(b2)));
+}
+
+/* A hit that float rounding may decide: within 1e-4 of a triangle edge (or
+ * within the test's own rounding error of it), or at the very start or end
+ * of the ray's interval (a ray starting on a surface). */
+static bool grazing_hit(const lanes_scene *s, const lanes_hit *h, const lanes_ray *r)
+{
+    if (h->prim == LANES_NO_HIT) return false;
+    float scale = fmaxf(fabsf(h->t), 1.0f);
+    if (fabsf(h->t - r->tnear) <= 1e-4f * scale || fabsf(h->t - r->tfar) <= 1e-4f * fabsf(r->tfar))
+        return true;
+    double err, dist = edge_distance(s, h->prim, r, &err);
+    return dist < 1e-4 || dist < err;
+}
+
+/* Sorts a disagreement between lanes' and Embree's closest hits (for
+ * shadow rays: the nearest blockers each engine finds) into a category. */
+static void classify(const lanes_scene *s, const lanes_ray *r, const lanes_hit *l,
+                     const lanes_hit *e, agreement *a)
+{
+    if (l->prim != LANES_NO_HIT && e->prim != LANES_NO_HIT && l->prim != e->prim &&
+        fabsf(l->t - e->t) <= 1e-4f * fmaxf(fabsf(l->t), fabsf(e->t)))
+        a->ties++;
+    else if (grazing_hit(s, l, r) || grazing_hit(s, e, r))
+        a->grazing++;
+    else
+        a->other++;
+}
+
+/* ---- the command -------------------------------------------------------- */
+
+typedef struct {
+    const char *scene_spec;
+    const char *csv;
+    bool json, quick;
+    int threads;       /* all-threads figure; 1 means single thread only */
+    long rays;         /* camera rays, approximately */
+    int reps;
+    lanes_embree_isa embree_isa;
+    bool isa_given;
+    lanes_isa isa;
+} options;
+
+typedef struct {
+    options opt;
+    lanes_scene scene;
+    lanes_bvh2 bvh2;
+    lanes_wbvh wide[3]; /* widths 4, 8, 16 */
+    lanes_embree *embree;
+    lanes_isa isas[LANES_ISA_COUNT];
+    int isa_count;
+    lanes_isa ref_isa; /* traces the primary rays the secondary ones start from */
+    pool pools[2];     /* single thread, all threads */
+    int pool_count;
+    results res;
+    int width, height;
+    size_t ray_count[KIND_COUNT];
+} compare;
+
+static int width_slot(int w) { return w == 4 ? 0 : w == 8 ? 1 : 2; }
+
+/* On stderr, so that stdout holds only the table (or the JSON). */
+static void progress(const compare *c, const char *fmt, ...) CLI_PRINTF(2, 3);
+static void progress(const compare *c, const char *fmt, ...)
+{
+    va_list ap;
+    if (c->opt.json) return;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fflush(stderr);
+}
+
+/* One measured configuration: an engine, its method and set, its own
+ * output arrays. */
+typedef struct {
+    bool embree;
+    lanes_job lj;
+    embree_job ej;
+    lanes_embree_method method;
+    char name[40], isa[16];
+    double seconds[2][64]; /* per pool, per repetition */
+} config;
+
+static void run_config(pool *p, config *cf, size_t n, double *seconds)
+{
+    double s;
+    if (cf->embree) {
+        lanes_embree_batch_reset(cf->ej.batch); /* outside the clock */
+        s = pool_run(p, embree_work, &cf->ej, n);
+    } else {
+        s = pool_run(p, lanes_work, &cf->lj, n);
+    }
+    if (seconds) *seconds = s;
+}
+
+/* Every configuration of one kind of rays. The repetitions are interleaved
+ * (one run of each configuration, then the next round) so that a change in
+ * the machine's load during the measurement falls on all of them alike;
+ * a warm-up round comes first and is not timed. */
+static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
+{
+    bool occl = kind == KIND_SHADOW;
+    size_t nn = n ? n : 1;
+    config *cfg = calloc(LANES_ISA_COUNT * LANES_SCHEME_COUNT + 2 * LANES_EMBREE_METHOD_COUNT,
+                         sizeof *cfg);
+    lanes_embree_batch batches[LANES_EMBREE_METHOD_COUNT];
+    bool have_batch[LANES_EMBREE_METHOD_COUNT] = {false};
+    if (!cfg) cli_fail("compare: out of memory");
+    int ncfg = 0;
+    c->ray_count[kind] = n;
+
+    for (int ii = 0; ii < c->isa_count; ii++) {
+        const lanes_kernels *k = lanes_kernels_for(c->isas[ii]);
+        for (int sc = 0; sc < LANES_SCHEME_COUNT; sc++) {
+            config *cf = &cfg[ncfg++];
+            cf->lj = (lanes_job){k, (lanes_scheme)sc, &c->bvh2, &c->wide[width_slot(k->wide_width)],
+                                 rays, NULL, NULL, occl};
+            if (occl)
+                cf->lj.occluded = malloc(nn);
+            else
+                cf->lj.hits = malloc(nn * sizeof *cf->lj.hits);
+            if (!cf->lj.occluded && !cf->lj.hits) cli_fail("compare: out of memory");
+            snprintf(cf->name, sizeof cf->name, "%s", lanes_scheme_name((lanes_scheme)sc));
+            snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
+        }
+    }
+    for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
+        if (!lanes_embree_supports(c->embree, (lanes_embree_method)m)) continue;
+        lanes_error err;
+        if (!lanes_embree_batch_init(&batches[m], (lanes_embree_method)m, occl, rays, n, &err))
+            cli_fail("compare: %s", err.message);
+        have_batch[m] = true;
+        for (int coherent = 0; coherent < 2; coherent++) {
+            /* a single ray has no coherence to exploit: one context only */
+            if (coherent && m == LANES_EMBREE_1) continue;
+            config *cf = &cfg[ncfg++];
+            cf->embree = true;
+            cf->method = (lanes_embree_method)m;
+            cf->ej = (embree_job){c->embree, &batches[m], coherent != 0};
+            snprintf(cf->name, sizeof cf->name, "%s%s",
+                     lanes_embree_method_name((lanes_embree_method)m, occl),
+                     coherent ? "+coherent" : "");
+            snprintf(cf->isa, sizeof cf->isa, "%s",
+                     lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
+        }
+    }
+
+    progress(c, "  %s: %zu rays, %d configurations x %d thread counts x %d rounds\n",
+             kind_names[kind], n, ncfg, c->pool_count, c->opt.reps + 1);
+    for (int round = -1; round < c->opt.reps; round++)
+        for (int pi = 0; pi < c->pool_count; pi++)
+            for (int i = 0; i < ncfg; i++)
+                run_config(&c->pools[pi], &cfg[i], n, round < 0 ? NULL : &cfg[i].seconds[pi][round]);
+    if (lanes_embree_error(c->embree)[0]) cli_fail("compare: %s", lanes_embree_error(c->embree));
+
+    /* rows: per thread count, lanes then Embree; ratios against the best
+     * Embree row of the same rays and threads */
+    for (int pi = 0; pi < c->pool_count; pi++) {
+        size_t first = c->res.count;
+        double best = 0.0;
+        for (int i = 0; i < ncfg; i++) {
+            double s = cli_median(cfg[i].seconds[pi], (size_t)c->opt.reps);
+            row *w = add_row(&c->res);
+            w->kind = kind;
+            w->embree = cfg[i].embree;
+            snprintf(w->method, sizeof w->method, "%s", cfg[i].name);
+            snprintf(w->isa, sizeof w->isa, "%s", cfg[i].isa);
+            w->threads = c->pools[pi].threads;
+            w->mrays = s > 0 ? (double)n / s * 1e-6 : 0.0;
+            if (w->embree && w->mrays > best) best = w->mrays;
+        }
+        for (size_t i = first; i < c->res.count; i++)
+            c->res.rows[i].ratio = best > 0 ? c->res.rows[i].mrays / best : 0.0;
+    }
+
+    /* agreement: each set's wide scheme against rtcIntersect1/rtcOccluded1 */
+    lanes_hit *ref_hits = occl ? NULL : malloc(nn * sizeof *ref_hits);
+    uint8_t *ref_occ = occl ? malloc(nn) : NULL;
+    if (!ref_hits && !ref_occ) cli_fail("compare: out of memory");
+    if (occl)
+        lanes_embree_batch_occluded(&batches[LANES_EMBREE_1], ref_occ);
+    else
+        lanes_embree_batch_hits(&batches[LANES_EMBREE_1], ref_hits);
+    for (int i = 0; i < ncfg; i++) {
+        if (cfg[i].embree || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
+        agreement *a = &c->res.agree[c->res.agree_count++];
+        a->isa = cfg[i].lj.k->isa;
+        a->kind = kind;
+        a->rays = n;
+        a->agree = a->ties = a->grazing = a->other = 0;
+        for (size_t r = 0; r < n; r++) {
+            bool ok = occl ? (cfg[i].lj.occluded[r] != 0) == (ref_occ[r] != 0)
+                           : same_hit(&cfg[i].lj.hits[r], &ref_hits[r]);
+            if (ok) {
+                a->agree++;
+            } else if (!occl) {
+                classify(&c->scene, &rays[r], &cfg[i].lj.hits[r], &ref_hits[r], a);
+            } else {
+                /* the blockers behind the two answers, one ray each */
+                lanes_hit lh, eh;
+                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, LANES_TRI_MOLLER, &rays[r], 1,
+                                        &lh, NULL);
+                lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
+                classify(&c->scene, &rays[r], &lh, &eh, a);
+            }
+        }
+    }
+    free(ref_hits);
+    free(ref_occ);
+    for (int i = 0; i < ncfg; i++) {
+        free(cfg[i].lj.hits);
+        free(cfg[i].lj.occluded);
+    }
+    for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++)
+        if (have_batch[m]) lanes_embree_batch_free(&batches[m]);
+    free(cfg);
+}
+
+static void print_table(FILE *out, const compare *c)
+{
+    fprintf(out, "%-17s %-7s %-24s %-10s %7s %10s %9s\n", "rays", "engine", "method", "isa",
+            "threads", "Mrays/s", "vs Embree");
+    for (size_t i = 0; i < c->res.count; i++) {
+        const row *w = &c->res.rows[i];
+        fprintf(out, "%-17s %-7s %-24s %-10s %7d %10.2f %9.2f\n", kind_names[w->kind],
+                w->embree ? "embree" : "lanes", w->method, w->isa, w->threads, w->mrays, w->ratio);
+    }
+}
+
+static bool write_csv(const char *path, const compare *c)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return false;
+    fprintf(f, "rays,engine,method,isa,threads,mrays,ratio\n");
+    for (size_t i = 0; i < c->res.count; i++) {
+        const row *w = &c->res.rows[i];
+        cli_csv_field(f, kind_names[w->kind]);
+        fprintf(f, ",%s,", w->embree ? "embree" : "lanes");
+        cli_csv_field(f, w->method);
+        fputc(',', f);
+        cli_csv_field(f, w->isa);
+        fprintf(f, ",%d,%.4f,%.4f\n", w->threads, w->mrays, w->ratio);
+    }
+    return fclose(f) == 0;
+}
+
+static void print_json(const compare *c, double embree_build)
+{
+    printf("{\n  \"scene\": ");
+    cli_json_string(stdout, c->scene.name[0] ? c->scene.name : c->opt.scene_spec);
+    printf(",\n  \"triangles\": %zu,\n  \"cpu\": ", c->scene.triangle_count);
+    cli_json_string(stdout, lanes_cpu()->brand);
+    printf(",\n  \"embree_version\": ");
+    cli_json_string(stdout, RTC_VERSION_STRING);
+    printf(",\n  \"embree_isa\": ");
+    cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
+    printf(",\n  \"image\": [%d, %d],\n  \"reps\": %d,\n", c->width, c->height, c->opt.reps);
+    printf("  \"ray_counts\": {");
+    for (int k = 0; k < KIND_COUNT; k++)
+        printf("%s\"%s\": %zu", k ? ", " : "", kind_names[k], c->ray_count[k]);
+    printf("},\n  \"build_seconds\": {\"lanes_bvh2\": %.6f", c->bvh2.build_seconds);
+    for (int s = 0; s < 3; s++)
+        if (c->wide[s].width)
+            printf(", \"lanes_collapse_%d\": %.6f", c->wide[s].width, c->wide[s].collapse_seconds);
+    printf(", \"embree\": %.6f},\n  \"rows\": [\n", embree_build);
+    for (size_t i = 0; i < c->res.count; i++) {
+        const row *w = &c->res.rows[i];
+        printf("    {\"rays\": \"%s\", \"engine\": \"%s\", \"method\": ", kind_names[w->kind],
+               w->embree ? "embree" : "lanes");
+        cli_json_string(stdout, w->method);
+        printf(", \"isa\": ");
+        cli_json_string(stdout, w->isa);
+        printf(", \"threads\": %d, \"mrays\": %.4f, \"ratio\": %.4f}%s\n", w->threads, w->mrays,
+               w->ratio, i + 1 < c->res.count ? "," : "");
+    }
+    printf("  ],\n  \"agreement\": [\n");
+    for (size_t i = 0; i < c->res.agree_count; i++) {
+        const agreement *a = &c->res.agree[i];
+        printf("    {\"isa\": \"%s\", \"rays\": \"%s\", \"fraction\": %.6f, \"count\": %zu, "
+               "\"agree\": %zu, \"ties\": %zu, \"grazing\": %zu, \"other\": %zu}%s\n",
+               lanes_isa_name(a->isa), kind_names[a->kind],
+               a->rays ? (double)a->agree / (double)a->rays : 1.0, a->rays, a->agree, a->ties,
+               a->grazing, a->other, i + 1 < c->res.agree_count ? "," : "");
+    }
+    printf("  ]\n}\n");
+}
+
+static const char usage[] =
+    "usage: lanes compare [SCENE] [--isa NAME] [--embree-isa NAME] [--threads N]\n"
+    "                     [--rays N] [--reps N] [--csv FILE] [--json] [--quick]\n"
+    "\n"
+    "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
+    "\"wide\" = the set's wide BVH; Moller triangles) and through Embree (each of\n"
+    "rtcIntersect1/4/8/16/1M, default and coherent contexts; rtcOccluded* for\n"
+    "shadow rays), on one pinned thread and on N, and prints Mrays/s with the\n"
+    "ratio to the best Embree API for the same rays and threads.\n"
+    "\n"
+    "  SCENE              built-in name or scene/mesh file (default: default)\n"
+    "  --isa NAME         only this lanes set (default: every supported set, or\n"
+    "                     LANES_ISA's; LANES_MAX_ISA caps them)\n"
+    "  --embree-isa NAME  Embree's kernels: sse2, sse4.2, avx, avx2, avx512\n"
+    "                     (default: the best this CPU runs)\n"
+    "  --threads N        the all-threads figure uses N threads (default: all\n"
+    "                     CPUs this process may run on); 1: single thread only\n"
+    "  --rays N           about N camera rays, in the camera's aspect (default 262144,\n"
+    "                     512x512); shadow and diffuse rays start at their hits\n"
+    "  --reps N           timed repetitions, median reported (default 5)\n"
+    "  --csv FILE         also write the table rows to FILE\n"
+    "  --json             one JSON object on stdout instead of the table\n"
+    "  --quick            16384 camera rays, 2 repetitions (a smoke test)\n"
+    "\n"
+    "rays: primary (8x8 tiles, Morton order inside), shadow (primary hit to the\n"
+    "first point light), diffuse (one cosine-weighted bounce per primary hit,\n"
+    "fixed seed) and diffuse-shuffled (the same rays in random order).\n";
+
+static int allowed_cpus(int *cpus, int max)
+{
+    cpu_set_t set;
+    int n = 0;
+    if (sched_getaffinity(0, sizeof set, &set) != 0) {
+        cpus[0] = 0;
+        return 1;
+    }
+    for (int i = 0; i < CPU_SETSIZE && n < max; i++)
+        if (CPU_ISSET(i, &set)) cpus[n++] = i;
+    if (n == 0) cpus[n++] = 0;
+    return n;
+}
+
+static int compare_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
+{
+    compare *c = calloc(1, sizeof *c);
+    if (!c) cli_fail("compare: out of memory");
+    options *o = &c->opt;
+    int cpus[MAX_THREADS];
+    int ncpus = allowed_cpus(cpus, MAX_THREADS);
+    o->scene_spec = "default";
+    o->threads = ncpus;
+    o->rays = -1;
+    o->reps = -1;
+    o->embree_isa = lanes_embree_isa_best();
+    o->isa_given = ctx->forced_isa != LANES_ISA_NONE;
+    o->isa = ctx->forced_isa;
+    bool scene_given = false;
+
+    cli_args a = cli_args_begin(ctx, self, argc, argv);
+    const char *v;
+    while (cli_args_next(&a)) {
+        if (cli_flag(&a, "--json")) {
+            o->json = true;
+        } else if (cli_flag(&a, "--quick")) {
+            o->quick = true;
+        } else if (cli_value(&a, "--csv", &v)) {
+            o->csv = v;
+        } else if (cli_value(&a, "--threads", &v)) {
+            o->threads = (int)cli_parse_count(&a, "--threads", v, 1, MAX_THREADS);
+        } else if (cli_value(&a, "--rays", &v)) {
+            o->rays = (long)cli_parse_count(&a, "--rays", v, 1, 4096L * 4096L);
+        } else if (cli_value(&a, "--reps", &v)) {
+            o->reps = (int)cli_parse_count(&a, "--reps", v, 1, 64);
+        } else if (cli_value(&a, "--embree-isa", &v)) {
+            o->embree_isa = lanes_embree_isa_from_name(v);
+            if (o->embree_isa == LANES_EMBREE_ISA_NONE)
+                cli_usage_error(ctx, self, "--embree-isa: unknown Embree ISA '%s' (valid: %s)", v,
+                                lanes_embree_isa_all_names());
+            if (!lanes_embree_isa_cpu_can_run(o->embree_isa))
+                cli_fail("--embree-isa %s: this CPU cannot run Embree's %s kernels", v, v);
+        } else if (cli_global_option(&a)) {
+            o->isa_given = true;
+            o->isa = ctx->forced_isa;
+        } else if (a.argv[a.i][0] != '-' && !scene_given) {
+            o->scene_spec = a.argv[a.i];
+            scene_given = true;
+        } else {
+            cli_unknown_option(&a);
+        }
+    }
+    if (o->rays < 0) o->rays = o->quick ? 128 * 128 : 512 * 512;
+    if (o->reps < 0) o->reps = o->quick ? 2 : 5;
+
+    lanes_error err;
+    memset(&err, 0, sizeof err);
+    if (!lanes_scene_load(o->scene_spec, &c->scene, &err)) cli_fail("%s", err.message);
+    if (c->scene.triangle_count == 0) cli_fail("compare: scene '%s' has no triangles", o->scene_spec);
+
+    /* The lanes sets to measure: every supported one, unless the user chose
+     * a set (--isa, or LANES_ISA, already validated by lanes_isa_init) or
+     * capped them (LANES_MAX_ISA). */
+    const char *env_isa = getenv("LANES_ISA"), *env_cap = getenv("LANES_MAX_ISA");
+    if (!o->isa_given && env_isa && *env_isa) {
+        o->isa_given = true;
+        o->isa = lanes_isa_current();
+    }
+    lanes_isa cap = env_cap && *env_cap ? lanes_isa_from_name(env_cap) : LANES_ISA_NONE;
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = (lanes_isa)i;
+        bool want = o->isa_given ? isa == o->isa
+                                 : lanes_isa_supported(isa) && (cap == LANES_ISA_NONE || isa <= cap);
+        if (want) c->isas[c->isa_count++] = isa;
+    }
+    if (c->isa_count == 0) cli_fail("compare: no instruction set to measure");
+    c->ref_isa = c->isas[c->isa_count - 1];
+    for (int i = 0; i < c->isa_count; i++)
+        if (c->isas[i] == lanes_isa_best()) c->ref_isa = c->isas[i];
+
+    /* Pinned for the whole run; restored at the end. */
+    cpu_set_t saved_affinity;
+    bool have_affinity = pthread_getaffinity_np(pthread_self(), sizeof saved_affinity,
+                                                &saved_affinity) == 0;
+    pin_self(cpus[0]);
+
+    char features[512];
+    lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
+    if (!o->json) {
+        printf("cpu:      %s\n", lanes_cpu()->brand[0] ? lanes_cpu()->brand : "(unknown)");
+        printf("features: %s\n", features);
+        printf("lanes:    ");
+        for (int i = 0; i < c->isa_count; i++)
+            printf("%s%s (%d lane%s, %d-wide BVH)", i ? ", " : "", lanes_isa_name(c->isas[i]),
+                   lanes_isa_lanes(c->isas[i]), lanes_isa_lanes(c->isas[i]) == 1 ? "" : "s",
+                   lanes_kernels_for(c->isas[i])->wide_width);
+        printf("\nembree:   %s, ISA %s\n", RTC_VERSION_STRING, lanes_embree_isa_name(o->embree_isa));
+        printf("scene:    %s (%zu triangles)\n", c->scene.name[0] ? c->scene.name : o->scene_spec,
+               c->scene.triangle_count);
+        fflush(stdout);
+    }
+
+    /* builds: lanes' BVH2, each width a measured set needs, Embree's BVH */
+    lanes_bvh_build_options bo;
+    lanes_bvh_default_options(&bo);
+    bo.threads = o->threads;
+    if (!lanes_bvh2_build(&c->scene, &bo, &c->bvh2, &err)) cli_fail("compare: %s", err.message);
+    bool need[3] = {false, false, false};
+    for (int i = 0; i < c->isa_count; i++)
+        need[width_slot(lanes_kernels_for(c->isas[i])->wide_width)] = true;
+    for (int s = 0; s < 3; s++)
+        if (need[s] && !lanes_wbvh_from_bvh2(&c->bvh2, 4 << s, &c->wide[s], &err))
+            cli_fail("compare: %s", err.message);
+    if (!lanes_embree_create(&c->scene, o->embree_isa, o->threads, &c->embree, &err))
+        cli_fail("compare: %s", err.message);
+    double eb = lanes_embree_build_seconds(c->embree);
+    if (!o->json) {
+        printf("build:    lanes BVH2 %.2f ms", c->bvh2.build_seconds * 1e3);
+        for (int s = 0; s < 3; s++)
+            if (c->wide[s].width)
+                printf(", collapse to %d %.2f ms", c->wide[s].width, c->wide[s].collapse_seconds * 1e3);
+        printf("; Embree commit %.2f ms (%d thread%s)\n", eb * 1e3, o->threads,
+               o->threads == 1 ? "" : "s");
+        printf("          lanes/Embree build time:");
+        for (int s = 0; s < 3; s++)
+            if (c->wide[s].width)
+                printf(" %.2f (BVH2 + %d-wide)", (c->bvh2.build_seconds + c->wide[s].collapse_seconds) / eb,
+                       c->wide[s].width);
+        printf("\n");
+        fflush(stdout);
+    }
+
+    /* threads */
+    if (!pool_start(&c->pools[0], 1, cpus, ncpus)) cli_fail("compare: cannot start threads");
+    c->pool_count = 1;
+    if (o->threads > 1) {
+        if (!pool_start(&c->pools[1], o->threads, cpus, ncpus))
+            cli_fail("compare: cannot start %d threads", o->threads);
+        c->pool_count = 2;
+    }
+
+    /* rays */
+    float aspect = (float)c->scene.camera.width / (float)c->scene.camera.height;
+    if (!(aspect > 0.0f) || !isfinite(aspect)) aspect = 1.0f;
+    c->width = (int)lroundf(sqrtf((float)o->rays * aspect));
+    if (c->width < 1) c->width = 1;
+    c->height = (int)lround((double)o->rays / c->width);
+    if (c->height < 1) c->height = 1;
+    size_t np = 0;
+    lanes_ray *primary = camera_rays(&c->scene, c->width, c->height, &np);
+    lanes_hit *phits = malloc(np * sizeof *phits);
+    if (!primary || !phits) cli_fail("compare: out of memory for %zu rays", np);
+    {
+        lanes_job job = {lanes_kernels_for(c->ref_isa), LANES_SCHEME_WIDE, &c->bvh2,
+                         &c->wide[width_slot(lanes_kernels_for(c->ref_isa)->wide_width)],
+                         primary, phits, NULL, false};
+        pool_run(&c->pools[c->pool_count - 1], lanes_work, &job, np);
+    }
+    size_t npts = 0, nshadow = 0;
+    surface_point *pts = surface_points(&c->scene, primary, phits, np, &npts);
+    lanes_ray *shadow = pts ? shadow_rays(&c->scene, pts, npts, &nshadow) : NULL;
+    lanes_ray *diffuse = pts ? diffuse_rays(pts, npts) : NULL;
+    lanes_ray *shuffle = diffuse ? shuffled(diffuse, npts) : NULL;
+    if (!shuffle || !shadow) cli_fail("compare: out of memory for the secondary rays");
+    if (!o->json) {
+        printf("rays:     %dx%d camera rays (%zu hit), %zu shadow, %zu diffuse; median of %d runs\n\n",
+               c->width, c->height, npts, nshadow, npts, o->reps);
+        fflush(stdout);
+    }
+
+    run_kind(c, KIND_PRIMARY, primary, np);
+    run_kind(c, KIND_SHADOW, shadow, nshadow);
+    run_kind(c, KIND_DIFFUSE, diffuse, npts);
+    run_kind(c, KIND_SHUFFLED, shuffle, npts);
+
+    for (int i = 0; i < c->pool_count; i++) pool_stop(&c->pools[i]);
+    if (have_affinity) pthread_setaffinity_np(pthread_self(), sizeof saved_affinity, &saved_affinity);
+
+    int status = 0;
+    if (o->json) {
+        print_json(c, eb);
+    } else {
+        print_table(stdout, c);
+        printf("\nagreement of lanes (wide, Moller) with Embree (rtcIntersect1 / rtcOccluded1): same\n"
+               "primitive and t within 1e-4 relative, or both miss; shadow rays: same occlusion.\n"
+               "Differences: ties = two triangles at the same t; grazing = a hit within 1e-4\n"
+               "(barycentric) of a triangle edge or within the float test's rounding error of\n"
+               "one (small triangles seen edge-on), or at an end of the ray's interval.\n");
+        for (size_t i = 0; i < c->res.agree_count; i++) {
+            const agreement *ag = &c->res.agree[i];
+            printf("  %-10s %-17s %8.4f%%  (%zu of %zu differ: %zu ties, %zu grazing, %zu other)\n",
+                   lanes_isa_name(ag->isa), kind_names[ag->kind],
+                   ag->rays ? 100.0 * (double)ag->agree / (double)ag->rays : 100.0,
+                   ag->rays - ag->agree, ag->rays, ag->ties, ag->grazing, ag->other);
+        }
+    }
+    if (o->csv && !write_csv(o->csv, c)) {
+        cli_warn("compare: cannot write %s", o->csv);
+        status = 1;
+    }
+    if (fflush(stdout) != 0) status = 1;
+
+    free(primary);
+    free(phits);
+    free(pts);
+    free(shadow);
+    free(diffuse);
+    free(shuffle);
+    free(c->res.rows);
+    lanes_embree_destroy(c->embree);
+    for (int s = 0; s < 3; s++)
+        if (c->wide[s].width) lanes_wbvh_free(&c->wide[s]);
+    lanes_bvh2_free(&c->bvh2);
+    lanes_scene_free(&c->scene);
+    free(c);
+    return status;
+}
+
+const cli_command cli_cmd_compare = {
+    .name = "compare",
+    .summary = "lanes against Embree on the same rays: Mrays/s, ratios, agreement",
+    .usage = usage,
+    .run = compare_run,
+};
+
+int lanes_cmd_compare(int argc, char **argv)
+{
+    cli_context ctx = {.forced_isa = LANES_ISA_NONE, .path = "lanes compare"};
+    return compare_run(&ctx, &cli_cmd_compare, argc, argv);
+}

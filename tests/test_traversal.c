@@ -1,0 +1,1062 @@
+/* The single-ray traversals (trace_wide, occluded_wide, trace_bvh2,
+ * occluded_bvh2) of every supported kernel set, with both triangle tests,
+ * against two references:
+ *
+ *  brute  (small scenes, BVHs with leaves of at most 1, 4 and 12
+ *         triangles): every triangle tested with the same set's own
+ *         triangle kernel. The traversal must find exactly what the brute
+ *         force finds: the same t bit for bit, the same triangle unless
+ *         another one is hit at exactly that t (a tie, which either may
+ *         report), and occlusion iff a closest hit exists. Since both sides
+ *         run the same arithmetic per triangle, any other difference is a
+ *         traversal bug (a box culled wrongly, a stack lost, a stale tfar),
+ *         with one exception: a float t that lies outside its own
+ *         triangle's box (see judge()). The counting copies (stats != NULL)
+ *         must answer exactly as the plain ones. The double-precision
+ *         reference of tests/reference.h checks the brute force itself:
+ *         every difference must lie in its rounding band or be a tie.
+ *  embree (real meshes): Embree's rtcIntersect1/rtcOccluded1 on camera,
+ *         shadow and diffuse rays; agreement >= 99.99%, each disagreement
+ *         printed with its category: grazing (the hit point within 1e-4 of
+ *         a triangle edge in barycentric terms, or within the float test's
+ *         own rounding error of it, or at the start of the ray), coplanar
+ *         tie (different triangles at the same t), or other. Also: every
+ *         packet and stream API of the adapter answers as rtcIntersect1.
+ *
+ *   test_traversal brute [random|sphere|grid|tiny|default|all]
+ *   test_traversal embree SCENE [--rays N]   (exit 77: mesh not fetched)
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <embree3/rtcore_config.h>
+
+#include "bench/embree_adapter.h"
+#include "build/bvh.h"
+#include "build/scene.h"
+#include "build/scene_load.h"
+#include "build/scenes_builtin.h"
+#include "simd/isa.h"
+#include "trace/kernels.h"
+#include "tests/reference.h"
+
+#define SKIP 77
+
+static int failures;
+static int max_print = 40; /* TEST_MAX_PRINT overrides */
+
+#define CHECK(cond, ...)                                                                   \
+    do {                                                                                   \
+        if (!(cond)) {                                                                     \
+            failures++;                                                                    \
+            if (failures <= max_print) {                                                   \
+                printf("FAIL %s:%d: ", __FILE__, __LINE__);                                \
+                printf(__VA_ARGS__);                                                       \
+                printf("\n");                                                              \
+            }                                                                              \
+        }                                                                                  \
+    } while (0)
+
+/* ---- random numbers ------------------------------------------------------ */
+
+static uint64_t splitmix(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static double rnd(uint64_t *s) { return (double)(splitmix(s) >> 11) * 0x1p-53; }
+static float rndf(uint64_t *s, float lo, float hi) { return lo + (hi - lo) * (float)rnd(s); }
+
+static void random_dir(uint64_t *s, float d[3])
+{
+    double z = 2.0 * rnd(s) - 1.0, phi = 6.283185307179586 * rnd(s), r = sqrt(1.0 - z * z);
+    d[0] = (float)(r * cos(phi)), d[1] = (float)(r * sin(phi)), d[2] = (float)z;
+}
+
+/* ---- scenes -------------------------------------------------------------- */
+
+static void add_tri(lanes_scene *s, const float a[3], const float b[3], const float c[3])
+{
+    float v[9] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]};
+    lanes_error err;
+    if (!lanes_scene_add_triangle(s, v, 0, &err)) {
+        printf("cannot add a triangle: %s\n", err.message);
+        exit(1);
+    }
+}
+
+static void scene_start(lanes_scene *s, const char *name)
+{
+    lanes_scene_init(s);
+    snprintf(s->name, sizeof s->name, "%s", name);
+    lanes_material m;
+    memset(&m, 0, sizeof m);
+    snprintf(m.name, sizeof m.name, "grey");
+    m.kind = LANES_MAT_DIFFUSE;
+    m.color[0] = m.color[1] = m.color[2] = 0.7f;
+    lanes_error err;
+    if (!lanes_scene_add_material(s, &m, NULL, &err)) {
+        printf("cannot add a material: %s\n", err.message);
+        exit(1);
+    }
+}
+
+/* Random small triangles in [-1,1]^3, some of them exact duplicates (same
+ * vertices in the same order, so a tie is bitwise) and some duplicates with
+ * the vertices rotated (same plane, t equal up to rounding). */
+static void scene_random(lanes_scene *s)
+{
+    uint64_t seed = 1234;
+    scene_start(s, "random");
+    for (int i = 0; i < 600; i++) {
+        float c[3], v[3][3];
+        for (int a = 0; a < 3; a++) c[a] = rndf(&seed, -1.0f, 1.0f);
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++) v[k][a] = c[a] + rndf(&seed, -0.2f, 0.2f);
+        add_tri(s, v[0], v[1], v[2]);
+    }
+    for (int i = 0; i < 40; i++) {
+        size_t j = (size_t)(splitmix(&seed) % 600);
+        const float *v = s->verts + 9 * j;
+        if (i % 2)
+            add_tri(s, v, v + 3, v + 6);
+        else
+            add_tri(s, v + 3, v + 6, v);
+    }
+}
+
+/* A closed UV sphere: every vertex computed once and shared, so there are
+ * no cracks for a ray to slip through (with the watertight test). */
+static void scene_sphere(lanes_scene *s)
+{
+    enum { SEG = 48, RING = 24 };
+    float p[RING + 1][SEG][3];
+    scene_start(s, "sphere");
+    for (int r = 0; r <= RING; r++)
+        for (int k = 0; k < SEG; k++) {
+            double th = 3.141592653589793 * r / RING, ph = 6.283185307179586 * k / SEG;
+            p[r][k][0] = (float)(sin(th) * cos(ph));
+            p[r][k][1] = (float)cos(th);
+            p[r][k][2] = (float)(sin(th) * sin(ph));
+        }
+    for (int r = 0; r < RING; r++)
+        for (int k = 0; k < SEG; k++) {
+            int k1 = (k + 1) % SEG;
+            if (r > 0) add_tri(s, p[r][k], p[r][k1], p[r + 1][k]);
+            if (r < RING - 1) add_tri(s, p[r][k1], p[r + 1][k1], p[r + 1][k]);
+        }
+}
+
+/* Two grids of shared edges: a flat one in z = 0 (its boxes have zero
+ * thickness) and a vertical one in y = 0.25 that cuts through it. */
+static void scene_grid(lanes_scene *s)
+{
+    scene_start(s, "grid");
+    const int n = 24, m = 12;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            float x0 = -1.0f + 2.0f * (float)i / n, x1 = -1.0f + 2.0f * (float)(i + 1) / n;
+            float y0 = -1.0f + 2.0f * (float)j / n, y1 = -1.0f + 2.0f * (float)(j + 1) / n;
+            float a[3] = {x0, y0, 0}, b[3] = {x1, y0, 0}, c[3] = {x1, y1, 0}, d[3] = {x0, y1, 0};
+            add_tri(s, a, b, c);
+            add_tri(s, a, c, d);
+        }
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            float x0 = -0.5f + (float)i / m, x1 = -0.5f + (float)(i + 1) / m;
+            float z0 = -0.5f + (float)j / m, z1 = -0.5f + (float)(j + 1) / m;
+            float a[3] = {x0, 0.25f, z0}, b[3] = {x1, 0.25f, z0}, c[3] = {x1, 0.25f, z1},
+                  d[3] = {x0, 0.25f, z1};
+            add_tri(s, a, b, c);
+            add_tri(s, a, c, d);
+        }
+}
+
+/* Scenes small enough that the BVH2 root is a leaf (or nearly). */
+static void scene_tiny(lanes_scene *s, int count)
+{
+    char name[32];
+    snprintf(name, sizeof name, "tiny%d", count);
+    scene_start(s, name);
+    uint64_t seed = 99 + (uint64_t)count;
+    for (int i = 0; i < count; i++) {
+        float v[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++) v[k][a] = rndf(&seed, -1.0f, 1.0f);
+        add_tri(s, v[0], v[1], v[2]);
+    }
+}
+
+/* ---- rays for the small scenes --------------------------------------------- */
+
+static void bounds(const lanes_scene *s, float lo[3], float hi[3], float *size)
+{
+    lanes_scene_bounds(s, lo, hi);
+    float d = 0;
+    for (int a = 0; a < 3; a++) d = fmaxf(d, hi[a] - lo[a]);
+    *size = d > 0 ? d : 1.0f;
+}
+
+static void point_on(const lanes_scene *s, size_t tri, double b1, double b2, float p[3])
+{
+    const float *v = s->verts + 9 * tri;
+    for (int a = 0; a < 3; a++)
+        p[a] = (float)((1.0 - b1 - b2) * v[a] + b1 * v[3 + a] + b2 * v[6 + a]);
+}
+
+static const char *const ray_kind_names[10] = {
+    "random", "aimed", "aimed-tfar2", "at-vertex", "at-edge", "cut-short", "axis-parallel",
+    "from-surface", "zero-component", "invalid"};
+
+/* Kind of ray r of make_rays (for messages). */
+static const char *ray_kind_of(size_t r, size_t n)
+{
+    return r + 3 >= n ? ray_kind_names[9] : ray_kind_names[r % 9];
+}
+
+/* A mix chosen to reach the traversals' corners: rays at random, aimed at
+ * triangle interiors, vertices and edges (shared edges in the grid and the
+ * sphere), cut short before their target or started beyond it, parallel to
+ * the axes (infinite reciprocals: NaN slab distances at flat boxes),
+ * starting on a surface, and invalid rays. */
+static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, uint64_t seed)
+{
+    float lo[3], hi[3], size;
+    bounds(s, lo, hi, &size);
+    size_t ntri = s->triangle_count;
+    for (size_t i = 0; i < n; i++) {
+        lanes_ray *r = &rays[i];
+        float o[3], d[3], p[3];
+        float tnear = 0.0f, tfar = INFINITY;
+        size_t tri = (size_t)(splitmix(&seed) % ntri);
+        int kind = (int)(i % 9);
+        if (i + 3 >= n) kind = 9; /* the last few rays are invalid */
+        double b1 = rnd(&seed), b2 = rnd(&seed);
+        if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
+        switch (kind) {
+        case 3: /* a vertex: (b1, b2) = (1, 0), (0, 1) or (0, 0) */
+            b1 = (double)(splitmix(&seed) % 2);
+            b2 = b1 > 0 ? 0.0 : (double)(splitmix(&seed) % 2);
+            break;
+        case 4: /* the midpoint of the edge v0-v1 or v1-v2 */
+            b1 = 0.5, b2 = (double)(splitmix(&seed) % 2) * 0.5;
+            break;
+        default: break;
+        }
+        point_on(s, tri, b1, b2, p);
+        for (int a = 0; a < 3; a++) o[a] = rndf(&seed, lo[a] - 0.5f * size, hi[a] + 0.5f * size);
+        switch (kind) {
+        case 0: /* random */
+            random_dir(&seed, d);
+            break;
+        case 6: { /* parallel to an axis, through the target point */
+            int ax = (int)(splitmix(&seed) % 3);
+            float sg = splitmix(&seed) % 2 ? 1.0f : -1.0f;
+            d[0] = d[1] = d[2] = 0.0f;
+            d[ax] = sg;
+            for (int a = 0; a < 3; a++) o[a] = p[a] - d[a] * size;
+            break;
+        }
+        case 7: /* from a surface point outwards, tnear 0: the own triangle at t ~ 0 */
+            random_dir(&seed, d);
+            memcpy(o, p, sizeof o);
+            break;
+        case 8: /* a component that is zero (signed) or tiny */
+            for (int a = 0; a < 3; a++) d[a] = p[a] - o[a];
+            d[splitmix(&seed) % 3] = splitmix(&seed) % 2 ? -0.0f : 1e-30f;
+            break;
+        case 9: /* invalid */
+            random_dir(&seed, d);
+            if (i % 2) o[0] = NAN;
+            else d[0] = d[1] = d[2] = 0.0f;
+            break;
+        default: /* 1..5: aimed at p */
+            for (int a = 0; a < 3; a++) d[a] = p[a] - o[a];
+            if (kind == 5) {
+                float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                for (int a = 0; a < 3; a++) d[a] /= len;
+                if (i % 2) tfar = 0.999f * len;
+                else tnear = 1.001f * len;
+            } else {
+                tfar = kind == 2 ? 2.0f : INFINITY; /* d unnormalised: target at t = 1 */
+            }
+            break;
+        }
+        *r = (lanes_ray){{o[0], o[1], o[2]}, {d[0], d[1], d[2]}, {0, 0, 0}, tnear, tfar};
+        lanes_ray_prepare(r);
+    }
+    return n;
+}
+
+/* ---- double-precision reference ------------------------------------------- */
+
+typedef struct {
+    bool hit, parallel;
+    double t, b1, b2; /* b1, b2 of the plane point, even when outside */
+} dref;
+
+/* Möller–Trumbore in double: two-sided, boundary inside, t in [tnear, tfar]. */
+static dref ref_tri_d(const lanes_ray *r, const float *v)
+{
+    dref o = {false, false, 0, 0, 0};
+    double e1[3], e2[3], tv[3], p[3], q[3];
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v[3 + a] - v[a];
+        e2[a] = (double)v[6 + a] - v[a];
+        tv[a] = (double)r->o[a] - v[a];
+    }
+    p[0] = r->d[1] * e2[2] - (double)r->d[2] * e2[1];
+    p[1] = r->d[2] * e2[0] - (double)r->d[0] * e2[2];
+    p[2] = r->d[0] * e2[1] - (double)r->d[1] * e2[0];
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    if (det == 0.0) {
+        o.parallel = true;
+        return o;
+    }
+    q[0] = tv[1] * e1[2] - tv[2] * e1[1];
+    q[1] = tv[2] * e1[0] - tv[0] * e1[2];
+    q[2] = tv[0] * e1[1] - tv[1] * e1[0];
+    o.b1 = (tv[0] * p[0] + tv[1] * p[1] + tv[2] * p[2]) / det;
+    o.b2 = (r->d[0] * q[0] + r->d[1] * q[1] + r->d[2] * q[2]) / det;
+    o.t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) / det;
+    o.hit = o.b1 >= 0 && o.b2 >= 0 && o.b1 + o.b2 <= 1 && o.t >= r->tnear && o.t <= r->tfar;
+    return o;
+}
+
+/* Barycentric distance of the ray's plane point from the triangle's
+ * boundary (0 on an edge; +inf when the ray is parallel), measured against
+ * the larger of 1e-4 and the rounding error a float test makes in the
+ * barycentrics: the vertices relative to the origin carry an error of about
+ * u * (largest coordinate), which the division by the determinant
+ * (|d| * 2 area * cos) magnifies; so a small triangle far from the origin,
+ * seen at a grazing angle, cannot be resolved to 1e-4. Returns the
+ * distance in units of that tolerance: below 1 is grazing. */
+static double edge_distance(const lanes_ray *r, const float *v)
+{
+    dref d = ref_tri_d(r, v);
+    if (d.parallel) return 0.0;
+    double e1[3], e2[3], p[3], big = 0.0;
+    for (int a = 0; a < 3; a++) {
+        e1[a] = (double)v[3 + a] - v[a];
+        e2[a] = (double)v[6 + a] - v[a];
+        big = fmax(big, fmax(fabs((double)r->o[a]),
+                             fmax(fabs((double)v[a]), fmax(fabs((double)v[3 + a]), fabs((double)v[6 + a])))));
+    }
+    p[0] = r->d[1] * e2[2] - (double)r->d[2] * e2[1];
+    p[1] = r->d[2] * e2[0] - (double)r->d[0] * e2[2];
+    p[2] = r->d[0] * e2[1] - (double)r->d[1] * e2[0];
+    double det = fabs(e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2]);
+    double le = sqrt(fmax(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2],
+                          e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]));
+    double ld = sqrt((double)r->d[0] * r->d[0] + (double)r->d[1] * r->d[1] + (double)r->d[2] * r->d[2]);
+    double tol = fmax(1e-4, 8.0 * 0x1p-24 * big * le * ld / det);
+    double b0 = 1.0 - d.b1 - d.b2;
+    return fmin(fabs(b0), fmin(fabs(d.b1), fabs(d.b2))) / tol;
+}
+
+/* ---- the brute-force comparison -------------------------------------------- */
+
+enum { LEAF_SIZES = 3 };
+static const int leaf_sizes[LEAF_SIZES] = {1, 4, 12};
+
+static int width_slot(int w) { return w == 4 ? 0 : w == 8 ? 1 : 2; }
+
+static const char *algo_name(lanes_tri_algo a) { return a == LANES_TRI_MOLLER ? "moller" : "watertight"; }
+
+static void print_ray(const lanes_ray *r)
+{
+    printf("    ray o=(%.9g, %.9g, %.9g) d=(%.9g, %.9g, %.9g) t=[%.9g, %.9g]\n", r->o[0], r->o[1],
+           r->o[2], r->d[0], r->d[1], r->d[2], r->tnear, r->tfar);
+}
+
+static void print_tri(const lanes_scene *s, size_t k)
+{
+    const float *v = s->verts + 9 * k;
+    printf("    triangle %zu: (%.9g, %.9g, %.9g) (%.9g, %.9g, %.9g) (%.9g, %.9g, %.9g)\n", k, v[0],
+           v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
+}
+
+typedef struct {
+    size_t rays, ties, grazing, other;
+} dstats;
+
+/* The double reference (tests/reference.h) against the float brute force
+ * of one set: every difference must be explained by float rounding, which
+ * the reference measures per triangle: a decision within REF_BAND of its
+ * boundary (grazing an edge, t at an end of [tnear, tfar], nearly
+ * parallel), a t within its forward-error bound, or two triangles at the
+ * same t within that bound (a tie). Anything else is "other". */
+static void check_double(const lanes_scene *s, const lanes_ray *rays, size_t n,
+                         lanes_tri_algo algo, const long *brute, const float *brute_t, dstats *st)
+{
+    const int a = algo == LANES_TRI_MOLLER ? REF_MOLLER : REF_WATERTIGHT;
+    /* forward error of t: c * u * tscale; c covers the dozen or so
+     * roundings of either float test */
+    const double c_u = 64.0 * 0x1p-24;
+    for (size_t i = 0; i < n; i++) {
+        const lanes_ray *r = &rays[i];
+        ref_ray rr = {{r->o[0], r->o[1], r->o[2]}, {r->d[0], r->d[1], r->d[2]}, r->tnear, r->tfar};
+        long best = -1;
+        ref_tri_result rb;
+        memset(&rb, 0, sizeof rb);
+        for (size_t k = 0; k < s->triangle_count; k++) {
+            const float *v = s->verts + 9 * k;
+            ref_tri_result q = ref_tri(&rr, v, v + 3, v + 6);
+            if (q.hit && (best < 0 || q.t < rb.t)) best = (long)k, rb = q;
+        }
+        st->rays++;
+        ref_tri_result rf; /* the reference's view of the triangle the float test chose */
+        memset(&rf, 0, sizeof rf);
+        rf.margin[a] = INFINITY;
+        if (brute[i] >= 0) {
+            const float *v = s->verts + 9 * (size_t)brute[i];
+            rf = ref_tri(&rr, v, v + 3, v + 6);
+        }
+        if (best == brute[i]) {
+            if (best < 0 || fabs(brute_t[i] - rb.t) <= c_u * rb.tscale[a]) continue;
+            /* a t this close to tnear or tfar that rounding decides it */
+            if (rb.margin[a] < REF_BAND) {
+                st->grazing++;
+                continue;
+            }
+            st->other++;
+        } else if (best >= 0 && brute[i] >= 0 && rf.hit &&
+                   fabs(brute_t[i] - rb.t) <= c_u * fmax(rb.tscale[a], rf.tscale[a])) {
+            st->ties++;
+            continue;
+        } else if (fmin(best >= 0 ? rb.margin[a] : INFINITY, rf.margin[a]) < REF_BAND) {
+            st->grazing++;
+            continue;
+        } else {
+            st->other++;
+        }
+        if (st->other <= 5) {
+            printf("  double reference differs (other): ray %zu (%s): float brute force %ld "
+                   "t=%.9g, double %ld t=%.9g (margins %.3g, %.3g; t error scale %.3g)\n",
+                   i, ray_kind_of(i, n), brute[i], brute[i] >= 0 ? brute_t[i] : 0.0f, best,
+                   best >= 0 ? rb.t : 0.0, best >= 0 ? rb.margin[a] : INFINITY, rf.margin[a],
+                   best >= 0 ? rb.tscale[a] : 0.0);
+            print_ray(r);
+        }
+    }
+}
+
+static bool build_bvhs(const lanes_scene *s, lanes_bvh2 bvh[LEAF_SIZES], lanes_wbvh wide[LEAF_SIZES][3])
+{
+    lanes_error err;
+    for (int l = 0; l < LEAF_SIZES; l++) {
+        lanes_bvh_build_options bo;
+        lanes_bvh_default_options(&bo);
+        bo.max_leaf_size = leaf_sizes[l];
+        bo.threads = 1;
+        if (!lanes_bvh2_build(s, &bo, &bvh[l], &err)) {
+            printf("FAIL: BVH2 of %s: %s\n", s->name, err.message);
+            return false;
+        }
+        for (int w = 0; w < 3; w++)
+            if (!lanes_wbvh_from_bvh2(&bvh[l], 4 << w, &wide[l][w], &err)) {
+                printf("FAIL: %d-wide BVH of %s: %s\n", 4 << w, s->name, err.message);
+                return false;
+            }
+    }
+    return true;
+}
+
+/* Where the ray meets the box of a triangle's vertices, in double. */
+static void tri_box_interval(const lanes_ray *r, const lanes_triangles *t, size_t k, double *tin,
+                             double *tout)
+{
+    const float *c[3][3] = {{t->v0x, t->v1x, t->v2x}, {t->v0y, t->v1y, t->v2y},
+                            {t->v0z, t->v1z, t->v2z}};
+    *tin = -INFINITY, *tout = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        double lo = fmin(c[a][0][k], fmin(c[a][1][k], c[a][2][k]));
+        double hi = fmax(c[a][0][k], fmax(c[a][1][k], c[a][2][k]));
+        if (r->d[a] == 0.0f) {
+            if (r->o[a] < lo || r->o[a] > hi) *tin = INFINITY, *tout = -INFINITY;
+            continue;
+        }
+        double t1 = (lo - r->o[a]) / r->d[a], t2 = (hi - r->o[a]) / r->d[a];
+        *tin = fmax(*tin, fmin(t1, t2));
+        *tout = fmin(*tout, fmax(t1, t2));
+    }
+}
+
+/* One triangle alone through the set's kernel: its t, u, v, or false. */
+static bool one_tri(const lanes_kernels *k, lanes_tri_algo algo, const lanes_triangles *t, size_t i,
+                    const lanes_ray *r, float *th, float *uh, float *vh)
+{
+    /* a view starting at element i: the arrays' padding covers a full vector */
+    lanes_triangles one = {t->v0x + i, t->v0y + i, t->v0z + i, t->v1x + i, t->v1y + i,
+                           t->v1z + i, t->v2x + i, t->v2y + i, t->v2z + i, 1, 1};
+    return k->tri_wide_closest[algo](r, &one, 1, th, uh, vh, NULL) == 0;
+}
+
+typedef enum {
+    V_SAME,          /* same triangle, same t, u, v bit for bit (or both miss) */
+    V_TIE,           /* another triangle the kernel hits at exactly the same t */
+    V_OUTSIDE_BOX,   /* the brute force's t puts the hit outside its triangle's box */
+    V_WRONG          /* a closest-hit traversal bug */
+} verdict;
+
+/* The traversal's closest hit h against the brute force's (prim b at bt,
+ * bu, bv; b < 0: none). The one legitimate difference beyond ties: a float
+ * t that places the hit outside the triangle's own bounding box (more than
+ * the box test's 1 + 2 gamma(3) allows: a grazing ray or a nearly
+ * degenerate triangle, where Möller's t is ill-conditioned) may be culled
+ * by the box that holds it; the traversal must then still report a hit the
+ * kernel really makes, no nearer than the brute force's. */
+static verdict judge(const lanes_kernels *k, lanes_tri_algo algo, const lanes_triangles *tris,
+                     const lanes_ray *r, long b, float bt, float bu, float bv, const lanes_hit *h)
+{
+    bool have = h->prim != LANES_NO_HIT;
+    if (b < 0) return have ? V_WRONG : V_SAME;
+    if (have && h->t == bt && h->prim == (uint32_t)b)
+        return h->u == bu && h->v == bv ? V_SAME : V_WRONG;
+    float t1, u1, v1;
+    if (have && h->t == bt)
+        return h->prim < tris->count && one_tri(k, algo, tris, h->prim, r, &t1, &u1, &v1) &&
+                       t1 == bt
+                   ? V_TIE
+                   : V_WRONG;
+    double tin, tout;
+    tri_box_interval(r, tris, (size_t)b, &tin, &tout);
+    const double slack = 4.0 * 0x1p-24;
+    bool outside = bt < tin - slack * fabs(tin) || bt > tout + slack * fabs(tout);
+    bool real = !have || (h->prim < tris->count && one_tri(k, algo, tris, h->prim, r, &t1, &u1, &v1) &&
+                          t1 == h->t && u1 == h->u && v1 == h->v && h->t >= bt);
+    return outside && real ? V_OUTSIDE_BOX : V_WRONG;
+}
+
+/* Any hit iff a closest hit exists: the brute force's, or, when its winner
+ * may be culled (V_OUTSIDE_BOX), the traversal's own. */
+static bool occlusion_ok(verdict v, long b, const lanes_hit *h, bool occluded)
+{
+    if (occluded == (b >= 0)) return true;
+    return v == V_OUTSIDE_BOX && occluded == (h->prim != LANES_NO_HIT);
+}
+
+static void brute_scene(const lanes_scene *s, size_t nrays)
+{
+    int fail0 = failures;
+    lanes_bvh2 bvh[LEAF_SIZES];
+    lanes_wbvh wide[LEAF_SIZES][3];
+    memset(bvh, 0, sizeof bvh);
+    memset(wide, 0, sizeof wide);
+    if (!build_bvhs(s, bvh, wide)) {
+        failures++;
+        return;
+    }
+    lanes_triangles tris;
+    if (!lanes_triangles_alloc(&tris, s->triangle_count)) {
+        printf("FAIL: out of memory\n");
+        failures++;
+        return;
+    }
+    for (size_t k = 0; k < s->triangle_count; k++) {
+        const float *v = s->verts + 9 * k;
+        tris.v0x[k] = v[0], tris.v0y[k] = v[1], tris.v0z[k] = v[2];
+        tris.v1x[k] = v[3], tris.v1y[k] = v[4], tris.v1z[k] = v[5];
+        tris.v2x[k] = v[6], tris.v2y[k] = v[7], tris.v2z[k] = v[8];
+    }
+    tris.count = s->triangle_count;
+
+    lanes_ray *rays = malloc(nrays * sizeof *rays);
+    lanes_hit *hits = malloc(nrays * sizeof *hits), *hits2 = malloc(nrays * sizeof *hits2);
+    uint8_t *occ = malloc(nrays), *occ2 = malloc(nrays);
+    long *brute = malloc(nrays * sizeof *brute);
+    float *bt = malloc(nrays * sizeof *bt), *bu = malloc(nrays * sizeof *bu),
+          *bv = malloc(nrays * sizeof *bv);
+    make_rays(s, rays, nrays, 0xabcdef + s->triangle_count);
+
+    size_t ties = 0, outside = 0, hits_total = 0, checks = 0, by_kind[10] = {0};
+    dstats ds = {0, 0, 0, 0};
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = (lanes_isa)i;
+        if (!lanes_isa_supported(isa)) continue;
+        const lanes_kernels *k = lanes_kernels_for(isa);
+        for (int al = 0; al < LANES_TRI_ALGO_COUNT; al++) {
+            lanes_tri_algo algo = (lanes_tri_algo)al;
+            for (size_t r = 0; r < nrays; r++) {
+                bt[r] = bu[r] = bv[r] = 0.0f;
+                brute[r] = k->tri_wide_closest[algo](&rays[r], &tris, tris.count, &bt[r], &bu[r],
+                                                     &bv[r], NULL);
+                hits_total += brute[r] >= 0;
+            }
+            /* the double reference checks the brute force once per algorithm
+             * (Möller: the same formula; watertight: same decisions away
+             * from edges) */
+            if (isa == LANES_ISA_SCALAR) check_double(s, rays, nrays, algo, brute, bt, &ds);
+
+            for (int l = 0; l < LEAF_SIZES; l++) {
+                const lanes_wbvh *w = &wide[l][width_slot(k->wide_width)];
+                for (int scheme = 0; scheme < 2; scheme++) {
+                    const char *sn = scheme ? "bvh2" : "wide";
+                    lanes_trace_stats stats;
+                    memset(&stats, 0, sizeof stats);
+                    if (scheme) {
+                        k->trace_bvh2(&bvh[l], algo, rays, nrays, hits, NULL);
+                        k->trace_bvh2(&bvh[l], algo, rays, nrays, hits2, &stats);
+                        k->occluded_bvh2(&bvh[l], algo, rays, nrays, occ, NULL);
+                        k->occluded_bvh2(&bvh[l], algo, rays, nrays, occ2, &stats);
+                    } else {
+                        k->trace_wide(w, &bvh[l], algo, rays, nrays, hits, NULL);
+                        k->trace_wide(w, &bvh[l], algo, rays, nrays, hits2, &stats);
+                        k->occluded_wide(w, &bvh[l], algo, rays, nrays, occ, NULL);
+                        k->occluded_wide(w, &bvh[l], algo, rays, nrays, occ2, &stats);
+                    }
+                    CHECK(stats.rays == 2 * nrays, "%s %s %s: stats.rays %llu, expected %zu",
+                          s->name, k->name, sn, (unsigned long long)stats.rays, 2 * nrays);
+                    for (size_t r = 0; r < nrays; r++) {
+                        checks++;
+                        const lanes_hit *h = &hits[r];
+                        CHECK(memcmp(&hits[r], &hits2[r], sizeof *h) == 0 && occ[r] == occ2[r],
+                              "%s %s %s %s leaf %d ray %zu: the counting copy answers differently",
+                              s->name, k->name, algo_name(algo), sn, leaf_sizes[l], r);
+                        bool exists = brute[r] >= 0;
+                        verdict vd = judge(k, algo, &tris, &rays[r], brute[r], bt[r], bu[r], bv[r], h);
+                        bool occ_ok = occlusion_ok(vd, brute[r], h, occ[r] != 0);
+                        ties += vd == V_TIE;
+                        outside += vd == V_OUTSIDE_BOX;
+                        bool ok = vd != V_WRONG && occ_ok;
+                        if (!ok) by_kind[r + 3 >= nrays ? 9 : r % 9]++;
+                        CHECK(occ_ok,
+                              "%s %s %s occluded_%s leaf %d ray %zu (%s): occluded %d, brute force %s",
+                              s->name, k->name, algo_name(algo), sn, leaf_sizes[l], r,
+                              ray_kind_of(r, nrays), occ[r], exists ? "hits" : "misses");
+                        CHECK(vd != V_WRONG,
+                              "%s %s %s trace_%s leaf %d ray %zu (%s): prim %d t=%.9g u=%.9g "
+                              "v=%.9g; brute force prim %ld t=%.9g u=%.9g v=%.9g",
+                              s->name, k->name, algo_name(algo), sn, leaf_sizes[l], r,
+                              ray_kind_of(r, nrays), h->prim == LANES_NO_HIT ? -1 : (int)h->prim,
+                              h->t, h->u, h->v, brute[r], exists ? bt[r] : 0.0f,
+                              exists ? bu[r] : 0.0f, exists ? bv[r] : 0.0f);
+                        if (!ok && failures - fail0 <= 10) {
+                            print_ray(&rays[r]);
+                            if (exists) print_tri(s, (size_t)brute[r]);
+                            if (h->prim < s->triangle_count) print_tri(s, h->prim);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    printf("%-8s %6zu triangles, %zu rays: %zu traversal results checked, %zu closest hits in "
+           "the brute force, %zu ties resolved to another triangle at the same t, %zu where the "
+           "brute force's t lies outside its triangle's box; double "
+           "reference (both algorithms): %zu differ (%zu ties, %zu in the rounding band, %zu "
+           "other) -> %s\n",
+           s->name, s->triangle_count, nrays, checks, hits_total, ties, outside,
+           ds.ties + ds.grazing + ds.other, ds.ties, ds.grazing, ds.other,
+           failures == fail0 && ds.other == 0 ? "ok" : "FAIL");
+    if (failures != fail0) {
+        printf("  traversal results that differ from the brute force, by kind of ray:");
+        for (int kk = 0; kk < 10; kk++)
+            if (by_kind[kk]) printf(" %s %zu", ray_kind_names[kk], by_kind[kk]);
+        printf("\n");
+    }
+    /* Differences the double reference cannot explain are failures, and so
+     * is a band that grows beyond its expected rarity. */
+    CHECK(ds.other == 0, "%s: %zu differences from the double reference unexplained", s->name,
+          ds.other);
+
+    free(rays), free(hits), free(hits2), free(occ), free(occ2), free(brute), free(bt), free(bu), free(bv);
+    lanes_triangles_free(&tris);
+    for (int l = 0; l < LEAF_SIZES; l++) {
+        for (int w = 0; w < 3; w++) lanes_wbvh_free(&wide[l][w]);
+        lanes_bvh2_free(&bvh[l]);
+    }
+}
+
+static int run_brute(const char *which)
+{
+    bool all = strcmp(which, "all") == 0;
+    bool any = false;
+    lanes_scene s;
+    if (all || strcmp(which, "random") == 0) {
+        scene_random(&s), brute_scene(&s, 6000), lanes_scene_free(&s), any = true;
+    }
+    if (all || strcmp(which, "sphere") == 0) {
+        scene_sphere(&s), brute_scene(&s, 6000), lanes_scene_free(&s), any = true;
+    }
+    if (all || strcmp(which, "grid") == 0) {
+        scene_grid(&s), brute_scene(&s, 6000), lanes_scene_free(&s), any = true;
+    }
+    if (all || strcmp(which, "tiny") == 0) {
+        const int counts[] = {1, 2, 3, 5, 17};
+        for (size_t i = 0; i < sizeof counts / sizeof counts[0]; i++)
+            scene_tiny(&s, counts[i]), brute_scene(&s, 900), lanes_scene_free(&s);
+        any = true;
+    }
+    if (all || strcmp(which, "default") == 0) {
+        lanes_error err;
+        memset(&err, 0, sizeof err);
+        lanes_scene_init(&s);
+        if (!lanes_scene_load("default", &s, &err)) {
+            printf("FAIL: cannot load the default scene: %s\n", err.message);
+            failures++;
+        } else {
+            /* brute force costs rays x triangles per set and algorithm */
+            size_t n = (size_t)(2e7 / (double)(s.triangle_count + 1));
+            brute_scene(&s, n < 500 ? 500 : n > 3000 ? 3000 : n);
+        }
+        lanes_scene_free(&s);
+        any = true;
+    }
+    if (!any) {
+        printf("unknown scene '%s' (random, sphere, grid, tiny, default, all)\n", which);
+        return 2;
+    }
+    return failures ? 1 : 0;
+}
+
+/* ---- against Embree on real meshes ----------------------------------------- */
+
+typedef struct {
+    float x, y, z;
+} vec3;
+static vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
+static vec3 v3_load(const float *p) { return (vec3){p[0], p[1], p[2]}; }
+static vec3 add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static vec3 sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static vec3 scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
+static float dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static vec3 cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static vec3 normalize(vec3 a)
+{
+    float l = sqrtf(dot(a, a));
+    return l > 0.0f ? scale(a, 1.0f / l) : a;
+}
+static lanes_ray ray_of(vec3 o, vec3 d, float tnear, float tfar)
+{
+    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
+    lanes_ray_prepare(&r);
+    return r;
+}
+
+typedef enum { CAT_GRAZING, CAT_TIE, CAT_OTHER, CAT_COUNT } category;
+static const char *const cat_names[CAT_COUNT] = {"grazing", "coplanar tie", "other"};
+
+static bool same_hit(const lanes_hit *a, const lanes_hit *b)
+{
+    if (a->prim != b->prim) return false;
+    if (a->prim == LANES_NO_HIT) return true;
+    return fabsf(a->t - b->t) <= 1e-4f * fmaxf(fabsf(a->t), fabsf(b->t));
+}
+
+/* Why lanes and Embree disagree on one ray. For shadow rays the "hits" are
+ * the blockers each engine's closest-hit query finds within the segment. */
+static category explain(const lanes_scene *s, const lanes_ray *r, const lanes_hit *l,
+                        const lanes_hit *e, double *gap)
+{
+    *gap = INFINITY;
+    if (l->prim != LANES_NO_HIT && e->prim != LANES_NO_HIT && l->prim != e->prim &&
+        fabsf(l->t - e->t) <= 1e-4f * fmaxf(fabsf(l->t), fabsf(e->t)))
+        return CAT_TIE;
+    double g = INFINITY;
+    const lanes_hit *both[2] = {l, e};
+    for (int i = 0; i < 2; i++) {
+        const lanes_hit *h = both[i];
+        if (h->prim == LANES_NO_HIT) continue;
+        /* a hit at the very start of the interval: the ray starts on a surface */
+        if (fabsf(h->t - r->tnear) <= 1e-4f * fmaxf(1.0f, fabsf(h->t))) g = 0.0;
+        g = fmin(g, edge_distance(r, s->verts + 9 * (size_t)h->prim));
+    }
+    *gap = g;
+    return g < 1.0 ? CAT_GRAZING : CAT_OTHER;
+}
+
+/* For an occlusion disagreement: one engine found a blocker the other did
+ * not. Grazing when some triangle that the segment crosses, or nearly
+ * crosses (in double), is crossed within tolerance of its edge (see
+ * edge_distance) or at the segment's very start or end (a ray that starts
+ * on a surface). */
+static category explain_segment(const lanes_scene *s, const lanes_ray *r, double *gap)
+{
+    *gap = INFINITY;
+    double span = isfinite(r->tfar) ? fabs(r->tfar) : 1.0;
+    for (size_t k = 0; k < s->triangle_count; k++) {
+        const float *v = s->verts + 9 * k;
+        dref d = ref_tri_d(r, v);
+        if (d.parallel) continue;
+        bool in_range = d.t >= r->tnear - 1e-4 * span && d.t <= r->tfar + 1e-4 * span;
+        if (!in_range) continue;
+        double g = edge_distance(r, v);
+        bool inside = d.b1 >= 0 && d.b2 >= 0 && d.b1 + d.b2 <= 1.0;
+        if (!inside && g >= 1.0) continue;
+        bool at_end = fabs(d.t - r->tnear) <= 1e-4 * span || fabs(d.t - r->tfar) <= 1e-4 * span;
+        *gap = fmin(*gap, at_end ? 0.0 : g);
+    }
+    return *gap < 1.0 ? CAT_GRAZING : CAT_OTHER;
+}
+
+typedef struct {
+    const char *kind;
+    lanes_ray *rays;
+    size_t n;
+    bool occlusion;
+} ray_set;
+
+static bool file_exists(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0;
+}
+
+static int run_embree(const char *name, long nrays)
+{
+    lanes_scene s;
+    lanes_error err;
+    memset(&err, 0, sizeof err);
+    /* "bunny" is the CGAL mesh file itself (framed by the loader); other
+     * names are scenes, built-in or files. Missing meshes are a skip: they
+     * come from cmake/fetch_meshes.sh, not from the repository. */
+    char path[1024];
+    const char *spec = name;
+    if (strcmp(name, "bunny") == 0) {
+        snprintf(path, sizeof path, "%s/bunny00.off", lanes_mesh_dir());
+        if (!file_exists(path)) {
+            printf("SKIP: %s not found (run cmake/fetch_meshes.sh or set LANES_MESH_DIR)\n", path);
+            return SKIP;
+        }
+        spec = path;
+    } else {
+        for (size_t i = 0; i < lanes_builtin_scene_count(); i++) {
+            const lanes_builtin_info *in = lanes_builtin_scene_info(i);
+            if (strcmp(in->name, name) == 0 && in->needs_meshes && !lanes_builtin_meshes_available()) {
+                printf("SKIP: scene %s needs the meshes in %s (run cmake/fetch_meshes.sh or set "
+                       "LANES_MESH_DIR)\n", name, lanes_mesh_dir());
+                return SKIP;
+            }
+        }
+    }
+    if (!lanes_scene_load(spec, &s, &err)) {
+        printf("FAIL: %s\n", err.message);
+        return 1;
+    }
+    lanes_embree *emb;
+    if (!lanes_embree_create(&s, lanes_embree_isa_best(), 0, &emb, &err)) {
+        printf("FAIL: %s\n", err.message);
+        lanes_scene_free(&s);
+        return 1;
+    }
+    lanes_bvh2 bvh;
+    lanes_wbvh wide[3];
+    memset(wide, 0, sizeof wide);
+    lanes_bvh_build_options bo;
+    lanes_bvh_default_options(&bo);
+    if (!lanes_bvh2_build(&s, &bo, &bvh, &err)) {
+        printf("FAIL: %s\n", err.message);
+        return 1;
+    }
+    for (int w = 0; w < 3; w++)
+        if (!lanes_wbvh_from_bvh2(&bvh, 4 << w, &wide[w], &err)) {
+            printf("FAIL: %s\n", err.message);
+            return 1;
+        }
+    printf("scene %s: %zu triangles; Embree %s, ISA %s\n", name, s.triangle_count,
+           RTC_VERSION_STRING, lanes_embree_isa_name(lanes_embree_isa_best()));
+
+    /* rays: camera rays, then shadow and diffuse rays from Embree's hits
+     * (the engine under comparison does not choose its own inputs) */
+    int w = (int)lround(sqrt((double)nrays)), h = w;
+    const lanes_camera *c = &s.camera;
+    vec3 eye = v3_load(c->eye), fwd = normalize(sub(v3_load(c->target), eye));
+    vec3 right = normalize(cross(fwd, v3_load(c->up))), up = cross(right, fwd);
+    float tan_half = tanf(c->fov_y_degrees * 3.14159265f / 360.0f);
+    float aspect = c->width > 0 && c->height > 0 ? (float)c->width / (float)c->height : 1.0f;
+    size_t np = (size_t)w * (size_t)h;
+    lanes_ray *primary = malloc(np * sizeof *primary);
+    lanes_ray *shadow = malloc(np * sizeof *shadow);
+    lanes_ray *diffuse = malloc(np * sizeof *diffuse);
+    lanes_hit *eh = malloc(np * sizeof *eh), *lh = malloc(np * sizeof *lh);
+    uint8_t *eo = malloc(np), *lo_ = malloc(np);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
+            float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
+            primary[(size_t)y * w + x] =
+                ray_of(eye, normalize(add(fwd, add(scale(right, px), scale(up, py)))), 0.0f, INFINITY);
+        }
+    lanes_embree_trace1(emb, primary, np, eh);
+    float blo[3], bhi[3];
+    lanes_scene_bounds(&s, blo, bhi);
+    vec3 diag = sub(v3_load(bhi), v3_load(blo));
+    float eps = 1e-5f * sqrtf(dot(diag, diag)) + 1e-6f;
+    vec3 light = s.point_light_count ? v3_load(s.point_lights[0].position)
+                                     : add(scale(add(v3_load(blo), v3_load(bhi)), 0.5f),
+                                           scale(normalize(v3_load(c->up)), sqrtf(dot(diag, diag))));
+    size_t ns = 0, nd = 0;
+    uint64_t seed = 42;
+    for (size_t i = 0; i < np; i++) {
+        if (eh[i].prim == LANES_NO_HIT) continue;
+        const float *v = s.verts + 9 * (size_t)eh[i].prim;
+        vec3 v0 = v3_load(v), e1 = sub(v3_load(v + 3), v0), e2 = sub(v3_load(v + 6), v0);
+        vec3 p = add(v0, add(scale(e1, eh[i].u), scale(e2, eh[i].v)));
+        vec3 n = normalize(cross(e1, e2));
+        if (dot(n, v3_load(primary[i].d)) > 0) n = scale(n, -1.0f);
+        vec3 o = add(p, scale(n, eps));
+        vec3 to = sub(light, o);
+        float dist = sqrtf(dot(to, to));
+        if (dist > 0 && dot(to, n) > 0) shadow[ns++] = ray_of(o, scale(to, 1.0f / dist), 0.0f, dist * (1.0f - 1e-4f));
+        float r1 = (float)rnd(&seed), r2 = (float)rnd(&seed);
+        vec3 a = fabsf(n.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
+        vec3 nx = normalize(cross(a, n)), ny = cross(n, nx);
+        float phi = 6.2831853f * r1, rr = sqrtf(r2);
+        vec3 d = add(add(scale(nx, rr * cosf(phi)), scale(ny, rr * sinf(phi))),
+                     scale(n, sqrtf(fmaxf(0.0f, 1.0f - r2))));
+        diffuse[nd++] = ray_of(o, normalize(d), 0.0f, INFINITY);
+    }
+    ray_set sets[3] = {{"primary", primary, np, false}, {"shadow", shadow, ns, true},
+                       {"diffuse", diffuse, nd, false}};
+
+    int status = 0;
+    /* The adapter's layouts: every packet and stream API, with either
+     * context, answers what rtcIntersect1/rtcOccluded1 answer (ray k*W+j is
+     * lane j of packet k; the tail packet is masked). */
+    for (int si = 0; si < 3; si++) {
+        ray_set *rs = &sets[si];
+        if (rs->occlusion)
+            lanes_embree_occluded1(emb, rs->rays, rs->n, eo);
+        else
+            lanes_embree_trace1(emb, rs->rays, rs->n, eh);
+        int apis = 0;
+        size_t least = rs->n;
+        for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
+            if (!lanes_embree_supports(emb, (lanes_embree_method)m)) continue;
+            lanes_embree_batch b;
+            if (!lanes_embree_batch_init(&b, (lanes_embree_method)m, rs->occlusion, rs->rays, rs->n,
+                                         &err)) {
+                printf("FAIL: %s\n", err.message);
+                return 1;
+            }
+            for (int coherent = 0; coherent < 2; coherent++) {
+                lanes_embree_batch_reset(&b);
+                unsigned csr = lanes_fp_fast_enter();
+                /* in ranges, as the benchmark's threads take them */
+                for (size_t at = 0; at < rs->n; at += 4096)
+                    lanes_embree_batch_trace(emb, &b, at, at + 4096, coherent != 0);
+                lanes_fp_restore(csr);
+                size_t same = 0;
+                if (rs->occlusion) {
+                    lanes_embree_batch_occluded(&b, lo_);
+                    for (size_t r = 0; r < rs->n; r++) same += (lo_[r] != 0) == (eo[r] != 0);
+                } else {
+                    lanes_embree_batch_hits(&b, lh);
+                    for (size_t r = 0; r < rs->n; r++) same += same_hit(&lh[r], &eh[r]);
+                }
+                bool ok = same >= rs->n - rs->n / 10000 && !lanes_embree_error(emb)[0];
+                if (!ok) {
+                    printf("FAIL: embree %s%s on %zu %s rays: only %zu agree with the single-ray "
+                           "call %s\n",
+                           lanes_embree_method_name((lanes_embree_method)m, rs->occlusion),
+                           coherent ? "+coherent" : "", rs->n, rs->kind, same,
+                           lanes_embree_error(emb));
+                    status = 1;
+                }
+                apis++;
+                least = same < least ? same : least;
+            }
+            lanes_embree_batch_free(&b);
+        }
+        printf("embree: %d API/context combinations on %zu %s rays: at least %zu agree with "
+               "the single-ray call\n", apis, rs->n, rs->kind, least);
+    }
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = (lanes_isa)i;
+        if (!lanes_isa_supported(isa)) continue;
+        const lanes_kernels *k = lanes_kernels_for(isa);
+        for (int scheme = 0; scheme < 2; scheme++) {
+            for (int si = 0; si < 3; si++) {
+                ray_set *rs = &sets[si];
+                size_t n = rs->n, agree = 0, cats[CAT_COUNT] = {0, 0, 0};
+                const lanes_wbvh *wb = &wide[width_slot(k->wide_width)];
+                /* closest hits from both engines: the comparison itself for
+                 * camera and diffuse rays, the blockers found for shadow rays */
+                lanes_embree_trace1(emb, rs->rays, n, eh);
+                if (scheme)
+                    k->trace_bvh2(&bvh, LANES_TRI_MOLLER, rs->rays, n, lh, NULL);
+                else
+                    k->trace_wide(wb, &bvh, LANES_TRI_MOLLER, rs->rays, n, lh, NULL);
+                if (rs->occlusion) {
+                    lanes_embree_occluded1(emb, rs->rays, n, eo);
+                    if (scheme)
+                        k->occluded_bvh2(&bvh, LANES_TRI_MOLLER, rs->rays, n, lo_, NULL);
+                    else
+                        k->occluded_wide(wb, &bvh, LANES_TRI_MOLLER, rs->rays, n, lo_, NULL);
+                }
+                int printed = 0;
+                for (size_t r = 0; r < n; r++) {
+                    bool ok = rs->occlusion ? (eo[r] != 0) == (lo_[r] != 0) : same_hit(&lh[r], &eh[r]);
+                    if (ok) {
+                        agree++;
+                        continue;
+                    }
+                    double gap = INFINITY;
+                    /* explaining costs a pass over the triangles: past a few
+                     * hundred the verdict is FAIL anyway */
+                    size_t seen = cats[CAT_GRAZING] + cats[CAT_TIE] + cats[CAT_OTHER];
+                    category cat = seen >= 500      ? CAT_OTHER
+                                   : rs->occlusion  ? explain_segment(&s, &rs->rays[r], &gap)
+                                                 : explain(&s, &rs->rays[r], &lh[r], &eh[r], &gap);
+                    cats[cat]++;
+                    if (printed++ < 20) {
+                        printf("  %s %s %s ray %zu: lanes prim %d t=%.9g%s, embree prim %d t=%.9g%s "
+                               "-> %s (edge distance %.2g of tolerance)\n",
+                               k->name, scheme ? "single" : "wide", rs->kind, r,
+                               lh[r].prim == LANES_NO_HIT ? -1 : (int)lh[r].prim, lh[r].t,
+                               rs->occlusion ? (lo_[r] ? " occluded" : " clear") : "",
+                               eh[r].prim == LANES_NO_HIT ? -1 : (int)eh[r].prim, eh[r].t,
+                               rs->occlusion ? (eo[r] ? " occluded" : " clear") : "",
+                               cat_names[cat], gap);
+                        print_ray(&rs->rays[r]);
+                    }
+                }
+                double frac = n ? (double)agree / (double)n : 1.0;
+                bool pass = frac >= 0.9999;
+                printf("%-10s %-6s %-8s %7zu rays: agreement %.4f%% (%zu grazing, %zu coplanar "
+                       "tie, %zu other) %s\n",
+                       k->name, scheme ? "single" : "wide", rs->kind, n, 100.0 * frac,
+                       cats[CAT_GRAZING], cats[CAT_TIE], cats[CAT_OTHER], pass ? "ok" : "FAIL");
+                if (!pass) status = 1;
+            }
+        }
+    }
+    free(primary), free(shadow), free(diffuse), free(eh), free(lh), free(eo), free(lo_);
+    for (int i = 0; i < 3; i++) lanes_wbvh_free(&wide[i]);
+    lanes_bvh2_free(&bvh);
+    lanes_embree_destroy(emb);
+    lanes_scene_free(&s);
+    return status;
+}
+
+int main(int argc, char **argv)
+{
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    if (getenv("TEST_MAX_PRINT")) max_print = atoi(getenv("TEST_MAX_PRINT"));
+    char features[512];
+    lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
+    printf("cpu: %s\nfeatures: %s\nsets:", lanes_cpu()->brand, features);
+    for (int i = 0; i < LANES_ISA_COUNT; i++)
+        if (lanes_isa_supported((lanes_isa)i)) printf(" %s", lanes_isa_name((lanes_isa)i));
+    printf("\n");
+    if (argc >= 2 && strcmp(argv[1], "brute") == 0) return run_brute(argc >= 3 ? argv[2] : "all");
+    if (argc >= 3 && strcmp(argv[1], "embree") == 0) {
+        long n = 512 * 512;
+        if (argc >= 5 && strcmp(argv[3], "--rays") == 0) n = atol(argv[4]);
+        if (n < 1) n = 1;
+        return run_embree(argv[2], n);
+    }
+    printf("usage: test_traversal brute [random|sphere|grid|tiny|default|all]\n"
+           "       test_traversal embree SCENE [--rays N]\n");
+    return 2;
+}
