@@ -165,11 +165,87 @@ typedef struct {
     lanes_hit *hits;
     uint8_t *occluded;
     bool occlusion;
+    /* packets: the rays laid out as SoA before timing, in packets of
+     * LANES_PACKET_MAX_RAYS consecutive rays; their t range is restored
+     * from tnear0/tfar0 before each run (traversal shrinks tfar) */
+    bool packet;
+    lanes_rays soa;
+    float *tnear0, *tfar0, *u, *v;
+    uint32_t *prim;
 } lanes_job;
+
+/* Packets of consecutive rays: CHUNK is a multiple of the packet size, so a
+ * worker's range starts on a packet boundary. */
+static void packet_work(const lanes_job *j, size_t b, size_t e)
+{
+    for (size_t p = b; p < e; p += LANES_PACKET_MAX_RAYS) {
+        size_t n = e - p < LANES_PACKET_MAX_RAYS ? e - p : LANES_PACKET_MAX_RAYS;
+        lanes_rays view = j->soa;
+        float **arrays[] = {&view.ox, &view.oy, &view.oz, &view.dx, &view.dy, &view.dz,
+                            &view.rdx, &view.rdy, &view.rdz, &view.tnear, &view.tfar};
+        for (size_t a = 0; a < sizeof arrays / sizeof arrays[0]; a++) *arrays[a] += p;
+        view.count = n;
+        lanes_frustum f;
+        j->k->frustum_build(&view, NULL, n, &f);
+        lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, j->occlusion};
+        j->k->trace_packet(j->bvh2, &po, &view, j->prim + p, j->u + p, j->v + p,
+                           j->occluded ? j->occluded + p : NULL, NULL);
+    }
+}
+
+static bool packet_setup(lanes_job *j, size_t n)
+{
+    size_t nn = n ? n : 1;
+    if (!lanes_rays_alloc(&j->soa, nn)) return false;
+    j->tnear0 = malloc(nn * sizeof(float));
+    j->tfar0 = malloc(nn * sizeof(float));
+    j->u = malloc((nn + LANES_MAX_W) * sizeof(float));
+    j->v = malloc((nn + LANES_MAX_W) * sizeof(float));
+    j->prim = malloc((nn + LANES_MAX_W) * sizeof(uint32_t));
+    if (!j->tnear0 || !j->tfar0 || !j->u || !j->v || !j->prim) return false;
+    for (size_t i = 0; i < n; i++) {
+        const lanes_ray *r = &j->rays[i];
+        j->soa.ox[i] = r->o[0], j->soa.oy[i] = r->o[1], j->soa.oz[i] = r->o[2];
+        j->soa.dx[i] = r->d[0], j->soa.dy[i] = r->d[1], j->soa.dz[i] = r->d[2];
+        j->soa.tnear[i] = r->tnear, j->soa.tfar[i] = r->tfar;
+    }
+    j->soa.count = n;
+    j->k->rays_prepare(&j->soa, LANES_RCP_EXACT);
+    memcpy(j->tnear0, j->soa.tnear, n * sizeof(float));
+    memcpy(j->tfar0, j->soa.tfar, n * sizeof(float));
+    return true;
+}
+
+static void packet_reset(lanes_job *j, size_t n)
+{
+    memcpy(j->soa.tnear, j->tnear0, n * sizeof(float));
+    memcpy(j->soa.tfar, j->tfar0, n * sizeof(float));
+    for (size_t i = 0; i < n; i++) j->prim[i] = LANES_NO_HIT;
+    if (j->occluded) memset(j->occluded, 0, n);
+}
+
+static void packet_results(lanes_job *j, size_t n)
+{
+    if (j->occlusion) return;
+    for (size_t i = 0; i < n; i++)
+        j->hits[i] = j->prim[i] == LANES_NO_HIT ? (lanes_hit){INFINITY, 0.0f, 0.0f, LANES_NO_HIT}
+                                                : (lanes_hit){j->soa.tfar[i], j->u[i], j->v[i], j->prim[i]};
+}
+
+static void packet_free(lanes_job *j)
+{
+    if (!j->packet) return;
+    lanes_rays_free(&j->soa);
+    free(j->tnear0), free(j->tfar0), free(j->u), free(j->v), free(j->prim);
+}
 
 static void lanes_work(void *ctx, size_t b, size_t e)
 {
     const lanes_job *j = ctx;
+    if (j->packet) {
+        packet_work(j, b, e);
+        return;
+    }
     if (j->occlusion) {
         if (j->scheme == LANES_SCHEME_WIDE)
             j->k->occluded_wide(j->wide, j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b,
@@ -542,7 +618,9 @@ static void run_config(pool *p, config *cf, size_t n, double *seconds)
         lanes_embree_batch_reset(cf->ej.batch); /* outside the clock */
         s = pool_run(p, embree_work, &cf->ej, n);
     } else {
+        if (cf->lj.packet) packet_reset(&cf->lj, n); /* outside the clock */
         s = pool_run(p, lanes_work, &cf->lj, n);
+        if (cf->lj.packet) packet_results(&cf->lj, n);
     }
     if (seconds) *seconds = s;
 }
@@ -555,7 +633,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
 {
     bool occl = kind == KIND_SHADOW;
     size_t nn = n ? n : 1;
-    config *cfg = calloc(LANES_ISA_COUNT * LANES_SCHEME_COUNT + 2 * LANES_EMBREE_METHOD_COUNT,
+    config *cfg = calloc(LANES_ISA_COUNT * (LANES_SCHEME_COUNT + 1) + 2 * LANES_EMBREE_METHOD_COUNT,
                          sizeof *cfg);
     lanes_embree_batch batches[LANES_EMBREE_METHOD_COUNT];
     bool have_batch[LANES_EMBREE_METHOD_COUNT] = {false};
@@ -567,8 +645,9 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
         const lanes_kernels *k = lanes_kernels_for(c->isas[ii]);
         for (int sc = 0; sc < LANES_SCHEME_COUNT; sc++) {
             config *cf = &cfg[ncfg++];
-            cf->lj = (lanes_job){k, (lanes_scheme)sc, &c->bvh2, &c->wide[width_slot(k->wide_width)],
-                                 rays, NULL, NULL, occl};
+            cf->lj = (lanes_job){.k = k, .scheme = (lanes_scheme)sc, .bvh2 = &c->bvh2,
+                                 .wide = &c->wide[width_slot(k->wide_width)], .rays = rays,
+                                 .occlusion = occl};
             if (occl)
                 cf->lj.occluded = malloc(nn);
             else
@@ -577,6 +656,18 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             snprintf(cf->name, sizeof cf->name, "%s", lanes_scheme_name((lanes_scheme)sc));
             snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
         }
+        /* packets of 1024 consecutive rays (camera rays come in 8x8 pixel
+         * tiles, so a packet is a strip of 16 tiles), partition traversal
+         * of the BVH2 with the packet frustum built inside the clock */
+        config *cf = &cfg[ncfg++];
+        cf->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_SINGLE, .bvh2 = &c->bvh2, .rays = rays,
+                             .occlusion = occl};
+        cf->lj.packet = true;
+        cf->lj.hits = occl ? NULL : malloc(nn * sizeof *cf->lj.hits);
+        cf->lj.occluded = occl ? malloc(nn + LANES_MAX_W) : NULL;
+        if ((!cf->lj.hits && !cf->lj.occluded) || !packet_setup(&cf->lj, n)) cli_fail("compare: out of memory");
+        snprintf(cf->name, sizeof cf->name, "packet");
+        snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
     }
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
         if (!lanes_embree_supports(c->embree, (lanes_embree_method)m)) continue;
@@ -636,7 +727,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     else
         lanes_embree_batch_hits(&batches[LANES_EMBREE_1], ref_hits);
     for (int i = 0; i < ncfg; i++) {
-        if (cfg[i].embree || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
+        if (cfg[i].embree || cfg[i].lj.packet || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
         agreement *a = &c->res.agree[c->res.agree_count++];
         a->isa = cfg[i].lj.k->isa;
         a->kind = kind;
@@ -664,6 +755,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     for (int i = 0; i < ncfg; i++) {
         free(cfg[i].lj.hits);
         free(cfg[i].lj.occluded);
+        packet_free(&cfg[i].lj);
     }
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++)
         if (have_batch[m]) lanes_embree_batch_free(&batches[m]);
@@ -930,9 +1022,9 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     lanes_hit *phits = malloc(np * sizeof *phits);
     if (!primary || !phits) cli_fail("compare: out of memory for %zu rays", np);
     {
-        lanes_job job = {lanes_kernels_for(c->ref_isa), LANES_SCHEME_WIDE, &c->bvh2,
-                         &c->wide[width_slot(lanes_kernels_for(c->ref_isa)->wide_width)],
-                         primary, phits, NULL, false};
+        lanes_job job = {.k = lanes_kernels_for(c->ref_isa), .scheme = LANES_SCHEME_WIDE, .bvh2 = &c->bvh2,
+                         .wide = &c->wide[width_slot(lanes_kernels_for(c->ref_isa)->wide_width)],
+                         .rays = primary, .hits = phits};
         pool_run(&c->pools[c->pool_count - 1], lanes_work, &job, np);
     }
     size_t npts = 0, nshadow = 0;
