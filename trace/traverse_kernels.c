@@ -127,36 +127,48 @@ LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_a
     stack[sp++] = (stack_entry){0, 0, ray->tnear};
     while (sp > 0) {
         stack_entry e = stack[--sp];
-        if (e.t > tfar * LANES_ROBUST_SCALE) continue;
-        if (e.count > 0) {
-            if (stats) stats->leaves_visited++;
-            if (any) {
-                if (leaf_any(algo, &w, e.ref, e.count, stats)) return true;
-            } else {
-                found |= leaf_closest(algo, &w, b, e.ref, e.count, &tfar, hit, stats);
+        /* A node with one hit child goes straight on to it, without the
+         * stack: the common case below the top levels. */
+        for (;;) {
+            if (e.t > tfar * LANES_ROBUST_SCALE) break;
+            if (e.count > 0) {
+                if (stats) stats->leaves_visited++;
+                if (any) {
+                    if (leaf_any(algo, &w, e.ref, e.count, stats)) return true;
+                } else {
+                    found |= leaf_closest(algo, &w, b, e.ref, e.count, &tfar, hit, stats);
+                }
+                break;
             }
-            continue;
-        }
-        const float *node = wb->bounds + (size_t)e.ref * 6 * WIDE_WIDTH;
-        uint32_t bits = node_hits(node, &nr, tfar, tentry);
-        if (stats) count_node(stats, wb, e.ref);
-        /* Push the hit children farthest first, so the nearest is popped
-         * next: an insertion sort of at most WIDE_WIDTH entries. */
-        stack_entry *base = stack + sp;
-        int n = 0;
-        while (bits) {
-            int j = __builtin_ctz(bits);
-            bits &= bits - 1;
-            size_t slot = (size_t)e.ref * WIDE_WIDTH + (size_t)j;
-            stack_entry c = {wb->child[slot], wb->count[slot], tentry[j]};
-            int k = n++;
-            while (k > 0 && base[k - 1].t < c.t) {
-                base[k] = base[k - 1];
-                k--;
+            const float *node = wb->bounds + (size_t)e.ref * 6 * WIDE_WIDTH;
+            uint32_t bits = node_hits(node, &nr, tfar, tentry);
+            if (stats) count_node(stats, wb, e.ref);
+            if (bits == 0) break;
+            if ((bits & (bits - 1)) == 0) {
+                int j = __builtin_ctz(bits);
+                size_t slot = (size_t)e.ref * WIDE_WIDTH + (size_t)j;
+                e = (stack_entry){wb->child[slot], wb->count[slot], tentry[j]};
+                continue;
             }
-            base[k] = c;
+            /* Push the hit children farthest first, so the nearest is
+             * popped next: an insertion sort of at most WIDE_WIDTH entries. */
+            stack_entry *base = stack + sp;
+            int n = 0;
+            while (bits) {
+                int j = __builtin_ctz(bits);
+                bits &= bits - 1;
+                size_t slot = (size_t)e.ref * WIDE_WIDTH + (size_t)j;
+                stack_entry c = {wb->child[slot], wb->count[slot], tentry[j]};
+                int k = n++;
+                while (k > 0 && base[k - 1].t < c.t) {
+                    base[k] = base[k - 1];
+                    k--;
+                }
+                base[k] = c;
+            }
+            sp += n;
+            break;
         }
-        sp += n;
     }
     return found;
 }
