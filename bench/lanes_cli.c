@@ -5,6 +5,7 @@
  *     lanes [--isa NAME] <command> [options]      (--isa may also follow the command)
  *
  * Instruction-set choice: --isa > LANES_ISA > LANES_MAX_ISA cap > best. */
+#include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -92,8 +93,13 @@ int main(int argc, char **argv)
     cli_context ctx = {.forced_isa = LANES_ISA_NONE, .path = "lanes"};
 
     /* A bad LANES_ISA or LANES_MAX_ISA is the user's error: say so rather
-     * than run with a set they did not ask for. */
-    if (lanes_isa_init(message, sizeof message) != LANES_OK) cli_fail("%s", message);
+     * than run with a set they did not ask for. --isa takes precedence over
+     * the environment, so with --isa the environment's error does not stop
+     * the run (the set --isa names is checked when it is applied). */
+    bool isa_flag = false;
+    for (int i = 1; i < argc; i++)
+        if (strcmp(argv[i], "--isa") == 0 || strncmp(argv[i], "--isa=", 6) == 0) isa_flag = true;
+    if (lanes_isa_init(message, sizeof message) != LANES_OK && !isa_flag) cli_fail("%s", message);
 
     return cli_dispatch(&ctx, &root, argc - 1, argv + 1);
 }

@@ -1,0 +1,63 @@
+# Smoke test of the main job's benchmark: `lanes bench kernels --quick --csv`
+# must exit 0 and write a row for every set this CPU runs.
+#
+#   cmake -DCLI=<lanes> -DCSV=<file> -P check_bench.cmake
+#
+# Only that it runs and reports each set: the timings themselves vary from run
+# to run and are the study's business, not a test's.
+cmake_minimum_required(VERSION 3.25)
+
+function(fail text)
+  message(FATAL_ERROR "FAIL: ${text}")
+endfunction()
+
+foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
+  unset(ENV{${var}})
+endforeach()
+
+execute_process(COMMAND "${CLI}" info --json
+  RESULT_VARIABLE status OUTPUT_VARIABLE info ERROR_VARIABLE err)
+if(NOT status EQUAL 0)
+  fail("lanes info --json: exit status ${status}: ${err}")
+endif()
+string(JSON n LENGTH "${info}" supported)
+set(supported "")
+math(EXPR last "${n} - 1")
+foreach(i RANGE 0 ${last})
+  string(JSON isa GET "${info}" supported ${i})
+  list(APPEND supported ${isa})
+endforeach()
+
+file(REMOVE "${CSV}")
+message("run: ${CLI} bench kernels --quick --csv ${CSV}")
+execute_process(COMMAND "${CLI}" bench kernels --quick --csv "${CSV}"
+  RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}${err}")
+if(NOT status EQUAL 0)
+  fail("exit status ${status}")
+endif()
+if(NOT EXISTS "${CSV}")
+  fail("no CSV written")
+endif()
+
+file(STRINGS "${CSV}" rows)
+list(POP_FRONT rows header)
+string(REPLACE "," ";" columns "${header}")
+list(FIND columns isa isa_column)
+if(isa_column LESS 0)
+  fail("the CSV header has no isa column: ${header}")
+endif()
+set(seen "")
+foreach(row IN LISTS rows)
+  string(REPLACE "," ";" cells "${row}")
+  list(GET cells ${isa_column} isa)
+  list(APPEND seen ${isa})
+endforeach()
+foreach(isa IN LISTS supported)
+  if(NOT isa IN_LIST seen)
+    fail("no CSV row for supported set '${isa}'")
+  endif()
+endforeach()
+list(LENGTH rows count)
+string(REPLACE ";" "," supported "${supported}")
+message("PASS: ${count} rows covering ${supported}")

@@ -1,0 +1,233 @@
+# Runs `lanes info --json` in a given situation and checks which kernel set it
+# chose, or that it refused. Run by CTest through tests/system.cmake:
+#
+#   cmake -DCLI=<lanes> -DCOMPILED=scalar,sse4,... [options] -P check_cli.cmake
+#
+# Options (all optional):
+#   FEATURES     comma list of the CPU features the (emulated) CPU offers, as
+#                simd/cpu.c names them; empty: read /proc/cpuinfo
+#   QEMU, QEMU_CPU  run the CLI as `<QEMU> -cpu <QEMU_CPU> <lanes> ...`
+#   ENV_ISA, ENV_MAX, ENV_DISABLE  values for LANES_ISA, LANES_MAX_ISA,
+#                LANES_DISABLE_CPU_FEATURES
+#   FLAG_ISA     passed as `--isa <value>`
+#   EXPECT       "select" (default): exit 0 with the set computed below;
+#                "reject": exit status exactly 2, and a message that names a
+#                missing feature (or lists the valid names, for a bad name)
+#   EXPECT_MESSAGE  a regular expression the output must also match
+#
+# The expected choice is computed by check_oracle.cmake, independently of the
+# detector under test. Prints "SKIP:" (CTest's SKIP_REGULAR_EXPRESSION) when
+# the situation cannot arise on this CPU.
+cmake_minimum_required(VERSION 3.25)
+
+if(NOT CLI OR NOT EXISTS "${CLI}")
+  message(FATAL_ERROR "FAIL: CLI='${CLI}' does not exist")
+endif()
+if(NOT EXPECT)
+  set(EXPECT select)
+endif()
+
+include(${CMAKE_CURRENT_LIST_DIR}/check_oracle.cmake)
+if(NOT lanes_oracle_ok)
+  message("SKIP: no /proc/cpuinfo and no FEATURES given: no independent view of the CPU")
+  return()
+endif()
+
+# --- what the CLI should do --------------------------------------------------
+set(forced "")
+if(FLAG_ISA)
+  set(forced "${FLAG_ISA}")   # the flag is an API call: it beats the environment
+elseif(ENV_ISA)
+  set(forced "${ENV_ISA}")
+endif()
+
+set(expect_selected "")
+if(EXPECT STREQUAL "select")
+  if(forced)
+    if(NOT forced IN_LIST expect_supported)
+      string(REPLACE ";" "," u "${usable}")
+      message("SKIP: '${forced}' cannot run here (usable features from ${feature_source}: ${u}; compiled: ${COMPILED})")
+      return()
+    endif()
+    set(expect_selected "${forced}")
+  else()
+    # The best native set at or below the cap; avx512emu never automatically.
+    set(cap_index 5)
+    if(ENV_MAX)
+      list(FIND ALL_ISAS "${ENV_MAX}" cap_index)
+    endif()
+    set(expect_selected scalar)
+    foreach(i RANGE 0 ${cap_index})
+      list(GET ALL_ISAS ${i} isa)
+      if(NOT isa STREQUAL "avx512emu" AND isa IN_LIST expect_supported)
+        set(expect_selected ${isa})
+      endif()
+    endforeach()
+  endif()
+elseif(NOT EXPECT STREQUAL "reject")
+  fail("EXPECT must be select or reject, not '${EXPECT}'")
+endif()
+
+# --- run it ------------------------------------------------------------------
+# A clean environment: a LANES_* variable set by whoever runs ctest must not
+# change what this test sees.
+foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
+  unset(ENV{${var}})
+endforeach()
+if(NOT "${ENV_ISA}" STREQUAL "")
+  set(ENV{LANES_ISA} "${ENV_ISA}")
+endif()
+if(NOT "${ENV_MAX}" STREQUAL "")
+  set(ENV{LANES_MAX_ISA} "${ENV_MAX}")
+endif()
+if(NOT "${ENV_DISABLE}" STREQUAL "")
+  set(ENV{LANES_DISABLE_CPU_FEATURES} "${ENV_DISABLE}")
+endif()
+
+set(command "${CLI}" info --json)
+if(NOT "${FLAG_ISA}" STREQUAL "")
+  list(APPEND command --isa "${FLAG_ISA}")
+endif()
+if(QEMU)
+  list(PREPEND command "${QEMU}" -cpu "${QEMU_CPU}")
+endif()
+
+string(REPLACE ";" " " shown "${command}")
+set(shown_env "")
+foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
+  if(DEFINED ENV{${var}})
+    string(APPEND shown_env "${var}=$ENV{${var}} ")
+  endif()
+endforeach()
+message("run: ${shown_env}${shown}")
+
+execute_process(COMMAND ${command}
+  RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("exit status: ${status}")
+if(NOT out STREQUAL "")
+  message("stdout: ${out}")
+endif()
+if(NOT err STREQUAL "")
+  message("stderr: ${err}")
+endif()
+
+# A signal (SIGILL above all) comes back as text, not as a number.
+if(NOT status MATCHES "^[0-9]+$")
+  fail("the CLI died: ${status}")
+endif()
+
+if(EXPECT STREQUAL "reject")
+  if(NOT status EQUAL 2)
+    fail("expected exit status 2, got ${status}")
+  endif()
+  set(text "${out}${err}")
+  # Set names and feature names overlap (avx, avx2): the message's echo of
+  # the requested set must not count as naming the missing feature.
+  if(forced)
+    foreach(echo IN ITEMS "'${forced}'" "--isa ${forced}" "LANES_ISA=${forced}")
+      string(REPLACE "${echo}" "<set>" text "${text}")
+    endforeach()
+  endif()
+  if(EXPECT_MESSAGE AND NOT text MATCHES "${EXPECT_MESSAGE}")
+    fail("the message does not match '${EXPECT_MESSAGE}'")
+  endif()
+  if(forced AND NOT forced IN_LIST ALL_ISAS)
+    # A name that is no set: the message must list the real ones.
+    foreach(isa IN LISTS ALL_ISAS)
+      if(NOT text MATCHES "(^|[^a-z0-9])${isa}([^a-z0-9]|$)")
+        fail("the message does not list the valid name '${isa}'")
+      endif()
+    endforeach()
+  elseif(forced AND forced IN_LIST compiled)
+    # Refused for the CPU's sake: the message names a feature the set needs
+    # and the CPU (as the test sees it) lacks.
+    set(missing "")
+    foreach(f IN LISTS NEEDS_${forced})
+      if(NOT f IN_LIST usable)
+        list(APPEND missing ${f})
+      endif()
+    endforeach()
+    if(NOT missing)
+      fail("'${forced}' can run here, so refusing it is wrong")
+    endif()
+    set(named "")
+    foreach(f IN LISTS missing)
+      string(REPLACE "." "\\." re "${f}")
+      if(text MATCHES "(^|[^a-z0-9.])${re}([^a-z0-9.]|$)")
+        list(APPEND named ${f})
+      endif()
+    endforeach()
+    if(NOT named)
+      string(REPLACE ";" "," missing "${missing}")
+      fail("the message names none of the missing features (${missing})")
+    endif()
+    string(REPLACE ";" "," named "${named}")
+    message("refused, naming: ${named}")
+  endif()
+  message("PASS: refused with exit status 2")
+  return()
+endif()
+
+if(NOT status EQUAL 0)
+  fail("expected exit status 0, got ${status}")
+endif()
+
+string(JSON selected ERROR_VARIABLE json_err GET "${out}" selected)
+if(json_err)
+  fail("stdout is not the JSON object `lanes info --json` promises: ${json_err}")
+endif()
+string(JSON lanes ERROR_VARIABLE json_err GET "${out}" lanes)
+if(json_err)
+  fail("no \"lanes\" key: ${json_err}")
+endif()
+
+function(json_list key out_var)
+  string(JSON n ERROR_VARIABLE e LENGTH "${out}" ${key})
+  if(e)
+    fail("no \"${key}\" array: ${e}")
+  endif()
+  set(items "")
+  if(n GREATER 0)
+    math(EXPR last "${n} - 1")
+    foreach(i RANGE 0 ${last})
+      string(JSON item GET "${out}" ${key} ${i})
+      list(APPEND items "${item}")
+    endforeach()
+  endif()
+  list(SORT items)
+  set(${out_var} "${items}" PARENT_SCOPE)
+endfunction()
+
+json_list(compiled got_compiled)
+json_list(supported got_supported)
+set(want_compiled "${compiled}")
+list(SORT want_compiled)
+set(want_supported "${expect_supported}")
+list(SORT want_supported)
+
+# Lists shown with commas: a ";" would split the messages below.
+foreach(v got_compiled want_compiled got_supported want_supported)
+  string(REPLACE ";" "," ${v} "${${v}}")
+endforeach()
+set(problems "")
+if(NOT got_compiled STREQUAL want_compiled)
+  list(APPEND problems "compiled: got [${got_compiled}], the build made [${want_compiled}]")
+endif()
+if(NOT got_supported STREQUAL want_supported)
+  list(APPEND problems "supported: got [${got_supported}], expected [${want_supported}] from ${feature_source}")
+endif()
+if(NOT selected STREQUAL expect_selected)
+  list(APPEND problems "selected: got '${selected}', expected '${expect_selected}'")
+endif()
+if(NOT lanes STREQUAL "${LANES_${selected}}")
+  list(APPEND problems "lanes: got ${lanes} for '${selected}', expected ${LANES_${selected}}")
+endif()
+if(problems)
+  string(REPLACE ";" "\n  " problems "${problems}")
+  fail("\n  ${problems}")
+endif()
+set(where "")
+if(QEMU)
+  set(where " under qemu -cpu ${QEMU_CPU}")
+endif()
+message("PASS: selected ${selected}, lanes ${lanes}${where}")

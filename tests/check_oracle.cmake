@@ -1,0 +1,93 @@
+# The tests' own view of which kernel set a CPU can run, shared by the
+# check_*.cmake scripts (include()d, after they have read their -D options).
+#
+# What each set needs is restated here from design.md, not read from
+# simd/isa.c, and what the CPU offers comes from /proc/cpuinfo or from the
+# emulated model's list (FEATURES), never from the detector under test: a slip
+# in the detector or in isa.c shows up as a failure.
+#
+# Inputs: COMPILED (comma list of the sets the build made), FEATURES (comma
+# list; empty: /proc/cpuinfo), ENV_DISABLE (LANES_DISABLE_CPU_FEATURES).
+# Sets: compiled, usable (features after the switch), feature_source,
+# expect_supported (compiled and runnable), lanes_oracle_ok (FALSE: no view
+# of the CPU; the caller skips). Provides fail() and runnable().
+
+set(ALL_ISAS scalar sse4 avx avx2 avx512emu avx512)
+set(NEEDS_scalar sse2)
+set(NEEDS_sse4 sse2 sse4.1 popcnt)
+set(NEEDS_avx ${NEEDS_sse4} osxsave avx)
+set(NEEDS_avx2 ${NEEDS_avx} avx2 fma)
+set(NEEDS_avx512emu ${NEEDS_avx2})
+set(NEEDS_avx512 ${NEEDS_avx2} avx512f avx512dq avx512bw avx512vl)
+set(LANES_scalar 1)
+set(LANES_sse4 4)
+set(LANES_avx 8)
+set(LANES_avx2 8)
+set(LANES_avx512emu 16)
+set(LANES_avx512 16)
+set(ALL_FEATURES sse2 sse3 ssse3 sse4.1 sse4.2 popcnt osxsave avx f16c fma avx2 bmi1 bmi2
+    lzcnt avx512f avx512cd avx512dq avx512bw avx512vl)
+
+function(fail text)
+  message(FATAL_ERROR "FAIL: ${text}")
+endfunction()
+
+string(REPLACE "," ";" compiled "${COMPILED}")
+set(lanes_oracle_ok TRUE)
+
+if(FEATURES)
+  string(REPLACE "," ";" features "${FEATURES}")
+  set(feature_source "the emulated CPU model")
+elseif(EXISTS /proc/cpuinfo)
+  file(STRINGS /proc/cpuinfo flags_line REGEX "^flags[ \t]*:" LIMIT_COUNT 1)
+  string(REGEX REPLACE "^flags[ \t]*:[ \t]*" "" flags_line "${flags_line}")
+  string(REPLACE " " ";" flags "${flags_line}")
+  # Linux lists a feature only when the kernel enabled it: with `noxsave` it
+  # drops xsave and every AVX flag, which is what the OS-consent check wants.
+  # OSXSAVE itself is not listed; xsave stands for it.
+  set(cpuinfo_sse3 pni)
+  set(cpuinfo_sse4.1 sse4_1)
+  set(cpuinfo_sse4.2 sse4_2)
+  set(cpuinfo_osxsave xsave)
+  set(cpuinfo_lzcnt abm)
+  set(features "")
+  foreach(f IN LISTS ALL_FEATURES)
+    set(name "${f}")
+    if(DEFINED cpuinfo_${f})
+      set(name "${cpuinfo_${f}}")
+    endif()
+    if(name IN_LIST flags)
+      list(APPEND features ${f})
+    endif()
+  endforeach()
+  set(feature_source "/proc/cpuinfo")
+else()
+  set(lanes_oracle_ok FALSE)
+  set(features "")
+  set(feature_source "nothing")
+endif()
+
+# The disable switch takes features away from what the detector sees.
+string(REPLACE "," ";" disabled "${ENV_DISABLE}")
+set(usable "${features}")
+if(disabled)
+  list(REMOVE_ITEM usable ${disabled})
+endif()
+
+function(runnable isa out)
+  set(ok TRUE)
+  foreach(f IN LISTS NEEDS_${isa})
+    if(NOT f IN_LIST usable)
+      set(ok FALSE)
+    endif()
+  endforeach()
+  set(${out} ${ok} PARENT_SCOPE)
+endfunction()
+
+set(expect_supported "")
+foreach(isa IN LISTS ALL_ISAS)
+  runnable(${isa} ok)
+  if(ok AND isa IN_LIST compiled)
+    list(APPEND expect_supported ${isa})
+  endif()
+endforeach()
