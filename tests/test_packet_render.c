@@ -113,9 +113,12 @@ static void same_image(const lanes_scene *scene)
     }
 }
 
-/* Packet utilisation (Def. 4.2.2, mean over packets) of one ray type. */
+/* SIMD utilisation of one ray type, two ways: packet utilisation (Def.
+ * 4.2.2, the mean over packets, returned) and total utilisation (*total:
+ * live lanes over lane slots of every SIMD box and triangle test of the
+ * render, the measure of Wu's Table 4.2). */
 static double utilisation(const lanes_scene *scene, const lanes_accel *accel, lanes_isa isa,
-                          lanes_ray_type type, lanes_queue_heuristic queue, int size)
+                          lanes_ray_type type, lanes_queue_heuristic queue, int size, double *total)
 {
     lanes_packet_render_options po;
     lanes_packet_render_default_options(&po);
@@ -132,6 +135,9 @@ static double utilisation(const lanes_scene *scene, const lanes_accel *accel, la
         return NAN;
     }
     lanes_render_result_free(&r);
+    const lanes_packet_stats *s = &m.stats[type];
+    uint64_t slots = s->box_ops.lane_slots + s->tri_ops.lane_slots;
+    *total = slots ? (double)(s->box_ops.active_lanes + s->tri_ops.active_lanes) / (double)slots : NAN;
     return m.packets[type] ? m.packet_util_sum[type] / (double)m.packets[type] : NAN;
 }
 
@@ -161,22 +167,27 @@ static void degradation(const char *name)
         printf("SKIP %s: needs sets of 4, 8 and 16 lanes\n", name);
         skipped++;
     } else {
-        double u4 = utilisation(&scene, &accel, w4, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128);
-        double u8 = utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128);
-        double u16 = utilisation(&scene, &accel, w16, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128);
-        char what[256];
-        snprintf(what, sizeof what, "%s specular packet utilisation falls with width: 4 lanes %.4f > 8 lanes %.4f > 16 lanes %.4f",
-                 name, u4, u8, u16);
+        double t4, t8, t16;
+        double u4 = utilisation(&scene, &accel, w4, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128, &t4);
+        double u8 = utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128, &t8);
+        double u16 = utilisation(&scene, &accel, w16, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128, &t16);
+        char what[320];
+        snprintf(what, sizeof what,
+                 "%s specular packet SIMD utilisation (Def. 4.2.2) falls with width: 4 lanes %.4f > 8 lanes %.4f "
+                 "> 16 lanes %.4f (total: %.4f, %.4f, %.4f)",
+                 name, u4, u8, u16, t4, t8, t16);
         check(u4 > u8 && u8 > u16, what);
         if (strcmp(name, "20-bunnies-small") == 0) {
-            double global = utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_NONE, 128);
+            double global, arrival;
+            utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_NONE, 128, &global);
             snprintf(what, sizeof what,
-                     "%s: queued tracing (MAX) raises specular utilisation over global division at 8 lanes: %.4f > %.4f",
-                     name, u8, global);
-            check(u8 > global, what);
-            double arrival = utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_ARRIVAL, 128);
+                     "%s: queued tracing (MAX) raises total specular utilisation (Table 4.2's measure) over global "
+                     "division at 8 lanes: %.4f > %.4f",
+                     name, t8, global);
+            check(t8 > global, what);
+            utilisation(&scene, &accel, w8, LANES_RAYS_SPECULAR, LANES_QUEUE_ARRIVAL, 128, &arrival);
             printf("info: %s at 8 lanes: global division in arrival (Hilbert) order reaches %.4f "
-                   "(queued MAX %.4f): not asserted, reported\n", name, arrival, u8);
+                   "(queued MAX %.4f): not asserted, reported\n", name, arrival, t8);
         }
     }
     lanes_accel_free(&accel);
@@ -201,9 +212,12 @@ int main(void)
     if (load("dragon", &scene, &accel)) {
         lanes_isa w16 = isa_of_lanes(16);
         if (w16 != LANES_ISA_NONE) {
-            double u = utilisation(&scene, &accel, w16, LANES_RAYS_PRIMARY, LANES_QUEUE_MAX, 256);
-            char what[160];
-            snprintf(what, sizeof what, "dragon primary packet utilisation at 16 lanes %.4f stays above 0.6", u);
+            double total;
+            double u = utilisation(&scene, &accel, w16, LANES_RAYS_PRIMARY, LANES_QUEUE_MAX, 256, &total);
+            char what[200];
+            snprintf(what, sizeof what,
+                     "dragon primary packet SIMD utilisation (Def. 4.2.2) at 16 lanes %.4f stays above 0.6 "
+                     "(total %.4f)", u, total);
             check(u > 0.6, what);
         }
         lanes_accel_free(&accel);
