@@ -1,19 +1,24 @@
-/* Wide BVHs collapsed from the binary one (Dammertz et al. 2008's MBVH
- * collapse, opening the largest child first as Wald et al. 2008 and Embree
- * do): a wide node starts from the two children of a BVH2 node and opens
- * the interior child of largest surface area, the one a random ray is most
- * likely to enter, until it has `width` children or only leaves remain.
+/* Wide BVHs collapsed from the binary one (the MBVH collapse of Dammertz
+ * et al. 2008; Embree's wide builders pick the child to split next the
+ * same way): a wide node starts from the two children of a BVH2 node and
+ * opens the interior child of largest surface area, the one a random ray is
+ * most likely to enter, until it has `width` children or only leaves
+ * remain. Greedy top-down opening leaves the nodes near the leaves part
+ * empty (a BVH2 node with two leaf children becomes a wide node of two);
+ * lanes_wbvh_stats reports the fill.
  *
  * Two passes: the first decides the slots of every node (which BVH2 node
- * each slot holds), so the node count is known before the
- * SoA arrays, 32 * width bytes per node, are allocated; the second writes
- * those arrays.
+ * each slot holds), so that the node count is known before the SoA arrays,
+ * 32 * width bytes per node, are allocated; the second writes them, on as
+ * many threads as built the BVH2, in blocks whose SAH sums are added in
+ * block order (the same result for every thread count).
  *
  * Compiled for the x86-64 baseline. */
 #define _POSIX_C_SOURCE 200809L
 
 #include "build/bvh.h"
 #include "build/bvh_alloc.h"
+#include "build/bvh_pool.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -51,6 +56,64 @@ static bool fail(lanes_error *err, const char *msg)
 {
     if (err) snprintf(err->message, sizeof err->message, "wide bvh: %s", msg);
     return false;
+}
+
+enum { FILL_BLOCK = 2048 };
+
+typedef struct fill_ctx {
+    const lanes_bvh2 *bvh;
+    lanes_wbvh *out;
+    const uint32_t *slot, *wchild;
+    size_t count;
+    double *sah;        /* per block, unnormalised */
+    double root_area;   /* written by block 0 */
+} fill_ctx;
+
+/* Pass 2 for wide nodes [item * FILL_BLOCK, ...). */
+static void fill_block(void *ctx, size_t item, int tid)
+{
+    (void)tid;
+    fill_ctx *f = ctx;
+    const lanes_bvh2_node *nd = f->bvh->nodes;
+    lanes_wbvh *out = f->out;
+    const size_t W = (size_t)out->width;
+    const double ct = f->bvh->traversal_cost, ci = f->bvh->intersect_cost;
+    size_t begin = item * FILL_BLOCK, end = begin + FILL_BLOCK < f->count ? begin + FILL_BLOCK : f->count;
+    double sah = 0.0;
+    for (size_t i = begin; i < end; i++) {
+        float *b = out->bounds + i * 6 * W;
+        float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+        for (size_t j = 0; j < W; j++) {
+            size_t k = i * W + j;
+            uint32_t s = f->slot[k];
+            if (s == UINT32_MAX) {
+                for (int p = 0; p < 3; p++) {
+                    b[p * W + j] = INFINITY;
+                    b[(p + 3) * W + j] = -INFINITY;
+                }
+                out->child[k] = LANES_WBVH_EMPTY;
+                out->count[k] = 0;
+                continue;
+            }
+            const lanes_bvh2_node *c = &nd[s];
+            for (int p = 0; p < 3; p++) {
+                b[p * W + j] = c->min[p];
+                b[(p + 3) * W + j] = c->max[p];
+                box[p] = c->min[p] < box[p] ? c->min[p] : box[p];
+                box[p + 3] = c->max[p] > box[p + 3] ? c->max[p] : box[p + 3];
+            }
+            out->child[k] = f->wchild[k];
+            out->count[k] = c->count;
+            if (c->count > 0) sah += ci * c->count * node_area(c);
+        }
+        lanes_bvh2_node u;
+        memcpy(u.min, box, sizeof u.min);
+        memcpy(u.max, box + 3, sizeof u.max);
+        double a = node_area(&u);
+        sah += ct * a;
+        if (i == 0) f->root_area = a;
+    }
+    f->sah[item] = sah;
 }
 
 bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err)
@@ -167,39 +230,20 @@ bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lan
         ok = out->bounds && out->child && out->count;
     }
     double sah = 0.0, root_area = 0.0;
-    const double ct = bvh->traversal_cost, ci = bvh->intersect_cost;
-    for (size_t i = 0; ok && i < count; i++) {
-        float *b = out->bounds + i * 6 * W;
-        float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-        for (size_t j = 0; j < W; j++) {
-            size_t k = i * W + j;
-            uint32_t s = slot[k];
-            if (s == UINT32_MAX) {
-                for (int p = 0; p < 3; p++) {
-                    b[p * W + j] = INFINITY;
-                    b[(p + 3) * W + j] = -INFINITY;
-                }
-                out->child[k] = LANES_WBVH_EMPTY;
-                out->count[k] = 0;
-                continue;
-            }
-            const lanes_bvh2_node *c = &nd[s];
-            for (int p = 0; p < 3; p++) {
-                b[p * W + j] = c->min[p];
-                b[(p + 3) * W + j] = c->max[p];
-                box[p] = c->min[p] < box[p] ? c->min[p] : box[p];
-                box[p + 3] = c->max[p] > box[p + 3] ? c->max[p] : box[p + 3];
-            }
-            out->child[k] = wchild[k];
-            out->count[k] = c->count;
-            if (c->count > 0) sah += ci * c->count * node_area(c);
+    if (ok) {
+        fill_ctx f = {bvh, out, slot, wchild, count, NULL, 0.0};
+        size_t blocks = (count + FILL_BLOCK - 1) / FILL_BLOCK;
+        f.sah = malloc(blocks * sizeof *f.sah);
+        ok = f.sah != NULL;
+        if (ok) {
+            pool p;
+            pool_start(&p, blocks > 1 && bvh->threads > 1 ? bvh->threads : 1);
+            pool_run(&p, blocks, fill_block, &f);
+            pool_stop(&p);
+            for (size_t i = 0; i < blocks; i++) sah += f.sah[i];
+            root_area = f.root_area;
         }
-        lanes_bvh2_node u;
-        memcpy(u.min, box, sizeof u.min);
-        memcpy(u.max, box + 3, sizeof u.max);
-        double a = node_area(&u);
-        sah += ct * a;
-        if (i == 0) root_area = a;
+        free(f.sah);
     }
     free(roots);
     free(stack);
