@@ -16,6 +16,9 @@
 
 #include "bench/cli_commands.h"
 #include "bench/cli_common.h"
+#ifdef LANES_HAVE_COMPARE
+#include "bench/embree_adapter.h"
+#endif
 #include "build/scene_load.h"
 #include "trace/packet_render.h"
 #include "trace/render.h"
@@ -26,7 +29,7 @@
 typedef struct {
     char scene[64];
     char rays[12];
-    char scheme[24];
+    char scheme[40];
     char isa[16];
     int lanes;
     char queue[8];
@@ -206,6 +209,142 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
     snprintf(what, sizeof what, "%s: %s at %s", scene->name, lanes_scheme_name(scheme), lanes_isa_name(isa));
     progress(what);
 }
+
+#ifdef LANES_HAVE_COMPARE
+/* The study's primary rays alone, through lanes' packet traversal at each
+ * set and through Embree (rtcIntersect1, and rtcIntersect16 with the
+ * coherent flag, its best on such rays), so the JSON carries Embree's rows
+ * on the same rays. Rays are pixel centres of the study's camera and size,
+ * in 32x32-pixel quadrants (one lanes packet each) made of 4x4 tiles (one
+ * 16-lane group, one rtcIntersect16 packet). Only trace calls are timed;
+ * lanes' packet frusta are built inside the clock. */
+static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *count)
+{
+    const lanes_camera *c = &s->camera;
+    float eye[3] = {c->eye[0], c->eye[1], c->eye[2]}, fwd[3], right[3], up[3];
+    for (int a = 0; a < 3; a++) fwd[a] = c->target[a] - eye[a];
+    float l = sqrtf(fwd[0] * fwd[0] + fwd[1] * fwd[1] + fwd[2] * fwd[2]);
+    for (int a = 0; a < 3; a++) fwd[a] /= l;
+    right[0] = fwd[1] * c->up[2] - fwd[2] * c->up[1];
+    right[1] = fwd[2] * c->up[0] - fwd[0] * c->up[2];
+    right[2] = fwd[0] * c->up[1] - fwd[1] * c->up[0];
+    l = sqrtf(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
+    for (int a = 0; a < 3; a++) right[a] /= l;
+    up[0] = right[1] * fwd[2] - right[2] * fwd[1];
+    up[1] = right[2] * fwd[0] - right[0] * fwd[2];
+    up[2] = right[0] * fwd[1] - right[1] * fwd[0];
+    float tan_half = tanf(c->fov_y_degrees * 3.14159265358979323846f / 360.0f), aspect = (float)w / (float)h;
+    lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
+    if (!rays) return NULL;
+    size_t n = 0;
+    for (int qy = 0; qy < h; qy += 32)
+        for (int qx = 0; qx < w; qx += 32)
+            for (int ty = qy; ty < qy + 32; ty += 4)
+                for (int tx = qx; tx < qx + 32; tx += 4)
+                    for (int y = ty; y < ty + 4; y++)
+                        for (int x = tx; x < tx + 4; x++) {
+                            if (x >= w || y >= h) continue;
+                            float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
+                            float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
+                            lanes_ray *r = &rays[n++];
+                            for (int a = 0; a < 3; a++) {
+                                r->o[a] = eye[a];
+                                r->d[a] = fwd[a] + px * right[a] + py * up[a];
+                            }
+                            r->tnear = 0.0f;
+                            r->tfar = INFINITY;
+                            lanes_ray_prepare(r);
+                        }
+    *count = n;
+    return rays;
+}
+
+static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_bvh2 *bvh,
+                         const study_plan *plan)
+{
+    size_t n = 0;
+    lanes_ray *rays = quadrant_rays(scene, plan->width, plan->height, &n);
+    lanes_rays soa;
+    float *tfar0 = malloc((n + 1) * sizeof(float)), *u = malloc((n + LANES_MAX_W) * sizeof(float));
+    float *v = malloc((n + LANES_MAX_W) * sizeof(float));
+    uint32_t *prim = malloc((n + LANES_MAX_W) * sizeof(uint32_t));
+    if (!rays || !tfar0 || !u || !v || !prim || !lanes_rays_alloc(&soa, n)) cli_fail("study: out of memory");
+    lanes_error err;
+    lanes_embree *e = NULL;
+    if (!lanes_embree_create(scene, lanes_embree_isa_best(), 0, &e, &err)) cli_fail("study: %s", err.message);
+    unsigned csr = lanes_fp_fast_enter();
+    double t[64];
+    int reps = plan->reps < 64 ? plan->reps : 64;
+
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        if (!plan->isas[i]) continue;
+        const lanes_kernels *k = lanes_kernels_for((lanes_isa)i);
+        for (size_t r = 0; r < n; r++) {
+            soa.ox[r] = rays[r].o[0], soa.oy[r] = rays[r].o[1], soa.oz[r] = rays[r].o[2];
+            soa.dx[r] = rays[r].d[0], soa.dy[r] = rays[r].d[1], soa.dz[r] = rays[r].d[2];
+            soa.tnear[r] = rays[r].tnear, soa.tfar[r] = rays[r].tfar;
+        }
+        soa.count = n;
+        k->rays_prepare(&soa, LANES_RCP_EXACT);
+        memcpy(tfar0, soa.tfar, n * sizeof(float));
+        for (int rep = 0; rep < reps; rep++) {
+            memcpy(soa.tfar, tfar0, n * sizeof(float));
+            for (size_t r = 0; r < n; r++) prim[r] = LANES_NO_HIT;
+            uint64_t t0 = cli_now_ns();
+            for (size_t p = 0; p < n; p += LANES_PACKET_MAX_RAYS) {
+                lanes_rays view = soa;
+                float **arrays[] = {&view.ox, &view.oy, &view.oz, &view.dx, &view.dy, &view.dz,
+                                    &view.rdx, &view.rdy, &view.rdz, &view.tnear, &view.tfar};
+                for (size_t a = 0; a < sizeof arrays / sizeof arrays[0]; a++) *arrays[a] += p;
+                view.count = n - p < LANES_PACKET_MAX_RAYS ? n - p : LANES_PACKET_MAX_RAYS;
+                lanes_frustum f;
+                k->frustum_build(&view, NULL, view.count, &f);
+                lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, false};
+                k->trace_packet(bvh, &po, &view, prim + p, u + p, v + p, NULL, NULL);
+            }
+            t[rep] = (double)(cli_now_ns() - t0) * 1e-9;
+        }
+        study_row *row = add_row(rows);
+        fill_common(row, scene, "primary", "packet-trace", (lanes_isa)i, "none", 0, LANES_PACKET_MAX_RAYS);
+        row->seconds = cli_median(t, (size_t)reps);
+        row->mrays = (double)n / row->seconds * 1e-6;
+        row->ray_count = (double)n;
+    }
+    static const struct {
+        lanes_embree_method m;
+        bool coherent;
+        const char *name;
+    } methods[] = {{LANES_EMBREE_1, false, "embree-rtcIntersect1"},
+                   {LANES_EMBREE_16, true, "embree-rtcIntersect16-coherent"}};
+    for (size_t mi = 0; mi < sizeof methods / sizeof methods[0]; mi++) {
+        if (!lanes_embree_supports(e, methods[mi].m)) continue;
+        lanes_embree_batch b;
+        if (!lanes_embree_batch_init(&b, methods[mi].m, false, rays, n, &err)) cli_fail("study: %s", err.message);
+        for (int rep = 0; rep < reps; rep++) {
+            lanes_embree_batch_reset(&b);
+            uint64_t t0 = cli_now_ns();
+            lanes_embree_batch_trace(e, &b, 0, n, methods[mi].coherent);
+            t[rep] = (double)(cli_now_ns() - t0) * 1e-9;
+        }
+        lanes_embree_batch_free(&b);
+        study_row *row = add_row(rows);
+        fill_common(row, scene, "primary", methods[mi].name, LANES_ISA_NONE, "none", 0,
+                    lanes_embree_method_width(methods[mi].m));
+        snprintf(row->isa, sizeof row->isa, "%s", lanes_embree_isa_name(lanes_embree_get_isa(e)));
+        row->lanes = lanes_embree_method_width(methods[mi].m);
+        row->seconds = cli_median(t, (size_t)reps);
+        row->mrays = (double)n / row->seconds * 1e-6;
+        row->ray_count = (double)n;
+    }
+    lanes_fp_restore(csr);
+    lanes_embree_destroy(e);
+    lanes_rays_free(&soa);
+    free(rays), free(tfar0), free(u), free(v), free(prim);
+    char what[256];
+    snprintf(what, sizeof what, "%.63s: primary rays, lanes packets and Embree", scene->name);
+    progress(what);
+}
+#endif
 
 /* ---- output ---------------------------------------------------------- */
 
@@ -411,6 +550,17 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
             fputc('\n', f);
         }
 
+    fprintf(f, "\n## Primary rays alone: lanes packets against Embree on the same rays\n\n"
+               "Trace calls only (lanes: packets of 1024 rays, 32x32 pixels, frustum built inside the clock; "
+               "Embree: rtcIntersect1, and rtcIntersect16 with the coherent flag on 4x4 tiles).\n\n"
+               "| Scene | method | isa | Mrays/s |\n|---|---|---|---|\n");
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        if (strcmp(r->rays, "primary") || (strcmp(r->scheme, "packet-trace") && strncmp(r->scheme, "embree-", 7)))
+            continue;
+        fprintf(f, "| %s | %s | %s | %.2f |\n", r->scene, r->scheme, r->isa, r->mrays);
+    }
+
     fprintf(f, "\n## Live rays per visited node (Bikker 2012, Table 2 measure; packet scheme, MAX queue %d)\n\n"
                "| Scene | ISA | Rays | Interior | Leaf |\n|---|---|---|---|---|\n", best_q);
     for (int s = 0; s < nscenes; s++)
@@ -590,6 +740,9 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
     for (int i = 0; i < LANES_ISA_COUNT; i++) nisa += plan.isas[i];
     /* per scene: single scalar + wide per ISA + ranged per ISA + packet none + packet MAX/CORNER per size */
     progress_total = nspecs * (1 + nisa + nisa + nisa * (2 + 2 * plan.queue_size_count));
+#ifdef LANES_HAVE_COMPARE
+    progress_total += nspecs;
+#endif
 
     char hist_path[1024];
     snprintf(hist_path, sizeof hist_path, "%s/histograms.csv", out_dir);
@@ -635,6 +788,9 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
                                 plan.queue_sizes[q], &plan, hist);
             }
         }
+#ifdef LANES_HAVE_COMPARE
+        primary_rows(&rows, &scene, &accel4.bvh2, &plan);
+#endif
         lanes_wbvh_free(&accel8.wide);
         lanes_wbvh_free(&accel16.wide);
         lanes_accel_free(&accel4);
