@@ -663,7 +663,7 @@ static void write_plots(const char *dir, const row_list *rows, char scenes[][64]
                      "set output 'queue_size_%s.png'\nset multiplot layout 1,2 title 'Queue size: %s (%s)'\n"
                      "set logscale x 2\nset xlabel 'minimum triangles in a queue node'\nset key bottom left\n"
                      "f(q)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"specular\\\" && $3==\\\"packet\\\" && $4==\\\"%s\\\" && $6==\\\"%%s\\\"' measurements.csv | sort -t, -k7n\", q)\n"
-                     "set ylabel 'specular utilization'\nplot f('MAX') using 7:10 with linespoints title 'MAX', f('CORNER') using 7:10 with linespoints title 'CORNER'\n"
+                     "set ylabel 'specular SIMD utilization (total)'\nplot f('MAX') using 7:9 with linespoints title 'MAX', f('CORNER') using 7:9 with linespoints title 'CORNER'\n"
                      "set ylabel 'render time (s)'\nplot f('MAX') using 7:11 with linespoints title 'MAX', f('CORNER') using 7:11 with linespoints title 'CORNER'\n"
                      "unset multiplot\n",
                      sc, sc, isa, sc, isa);
