@@ -180,11 +180,7 @@ static void packet_work(const lanes_job *j, size_t b, size_t e)
 {
     for (size_t p = b; p < e; p += LANES_PACKET_MAX_RAYS) {
         size_t n = e - p < LANES_PACKET_MAX_RAYS ? e - p : LANES_PACKET_MAX_RAYS;
-        lanes_rays view = j->soa;
-        float **arrays[] = {&view.ox, &view.oy, &view.oz, &view.dx, &view.dy, &view.dz,
-                            &view.rdx, &view.rdy, &view.rdz, &view.tnear, &view.tfar};
-        for (size_t a = 0; a < sizeof arrays / sizeof arrays[0]; a++) *arrays[a] += p;
-        view.count = n;
+        lanes_rays view = lanes_rays_view(&j->soa, p, n);
         lanes_frustum f;
         j->k->frustum_build(&view, NULL, n, &f);
         lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, j->occlusion};

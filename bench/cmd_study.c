@@ -22,6 +22,7 @@
 #include "build/scene_load.h"
 #include "trace/packet_render.h"
 #include "trace/render.h"
+#include "trace/shading.h"
 
 /* One measurement. Rows with rays == "all" carry the render's time; rows
  * per ray type carry that type's counts and utilisation (and the render's
@@ -221,19 +222,11 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
 static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *count)
 {
     const lanes_camera *c = &s->camera;
-    float eye[3] = {c->eye[0], c->eye[1], c->eye[2]}, fwd[3], right[3], up[3];
-    for (int a = 0; a < 3; a++) fwd[a] = c->target[a] - eye[a];
-    float l = sqrtf(fwd[0] * fwd[0] + fwd[1] * fwd[1] + fwd[2] * fwd[2]);
-    for (int a = 0; a < 3; a++) fwd[a] /= l;
-    right[0] = fwd[1] * c->up[2] - fwd[2] * c->up[1];
-    right[1] = fwd[2] * c->up[0] - fwd[0] * c->up[2];
-    right[2] = fwd[0] * c->up[1] - fwd[1] * c->up[0];
-    l = sqrtf(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
-    for (int a = 0; a < 3; a++) right[a] /= l;
-    up[0] = right[1] * fwd[2] - right[2] * fwd[1];
-    up[1] = right[2] * fwd[0] - right[0] * fwd[2];
-    up[2] = right[0] * fwd[1] - right[1] * fwd[0];
-    float tan_half = tanf(c->fov_y_degrees * 3.14159265358979323846f / 360.0f), aspect = (float)w / (float)h;
+    vec3 eye = v3_load(c->eye);
+    vec3 fwd = v3_normalize(v3_sub(v3_load(c->target), eye));
+    vec3 right = v3_normalize(v3_cross(fwd, v3_load(c->up)));
+    vec3 up = v3_cross(right, fwd);
+    float tan_half = tanf(c->fov_y_degrees * LANES_PI / 360.0f), aspect = (float)w / (float)h;
     lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
     if (!rays) return NULL;
     size_t n = 0;
@@ -246,14 +239,9 @@ static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *coun
                             if (x >= w || y >= h) continue;
                             float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
                             float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
-                            lanes_ray *r = &rays[n++];
-                            for (int a = 0; a < 3; a++) {
-                                r->o[a] = eye[a];
-                                r->d[a] = fwd[a] + px * right[a] + py * up[a];
-                            }
-                            r->tnear = 0.0f;
-                            r->tfar = INFINITY;
-                            lanes_ray_prepare(r);
+                            vec3 d = v3_add(fwd, v3_add(v3_scale(right, px), v3_scale(up, py)));
+                            rays[n++] = (lanes_ray){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, INFINITY};
+                            lanes_ray_prepare(&rays[n - 1]);
                         }
     *count = n;
     return rays;
@@ -292,11 +280,8 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
             for (size_t r = 0; r < n; r++) prim[r] = LANES_NO_HIT;
             uint64_t t0 = cli_now_ns();
             for (size_t p = 0; p < n; p += LANES_PACKET_MAX_RAYS) {
-                lanes_rays view = soa;
-                float **arrays[] = {&view.ox, &view.oy, &view.oz, &view.dx, &view.dy, &view.dz,
-                                    &view.rdx, &view.rdy, &view.rdz, &view.tnear, &view.tfar};
-                for (size_t a = 0; a < sizeof arrays / sizeof arrays[0]; a++) *arrays[a] += p;
-                view.count = n - p < LANES_PACKET_MAX_RAYS ? n - p : LANES_PACKET_MAX_RAYS;
+                lanes_rays view =
+                    lanes_rays_view(&soa, p, n - p < LANES_PACKET_MAX_RAYS ? n - p : LANES_PACKET_MAX_RAYS);
                 lanes_frustum f;
                 k->frustum_build(&view, NULL, view.count, &f);
                 lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, false};

@@ -313,6 +313,32 @@ void lanes_triangles_free(lanes_triangles *tris);
 bool lanes_tri_hits_alloc(lanes_tri_hits *hits, size_t count);
 void lanes_tri_hits_free(lanes_tri_hits *hits);
 
+/* Views of elements [first, first + count) of SoA arrays, sharing their
+ * storage: a packet of a larger ray set, a BVH leaf's triangles. The
+ * allocation's slack covers full-width loads from any start (see above). */
+static inline lanes_rays lanes_rays_view(const lanes_rays *r, size_t first, size_t count)
+{
+    lanes_rays v = *r;
+    v.ox += first, v.oy += first, v.oz += first;
+    v.dx += first, v.dy += first, v.dz += first;
+    v.rdx += first, v.rdy += first, v.rdz += first;
+    v.tnear += first, v.tfar += first;
+    v.count = count;
+    v.capacity = r->capacity - first;
+    return v;
+}
+
+static inline lanes_triangles lanes_triangles_view(const lanes_triangles *t, size_t first, size_t count)
+{
+    lanes_triangles v = *t;
+    v.v0x += first, v.v0y += first, v.v0z += first;
+    v.v1x += first, v.v1y += first, v.v1z += first;
+    v.v2x += first, v.v2y += first, v.v2z += first;
+    v.count = count;
+    v.capacity = t->capacity - first;
+    return v;
+}
+
 /* Bit-array helpers. */
 static inline size_t lanes_mask_words(size_t n) { return (n + 31) / 32; }
 static inline bool lanes_mask_get(const uint32_t *mask, size_t i)

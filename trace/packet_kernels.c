@@ -124,10 +124,7 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
         }
         lanes_frustum lf;
         LANES_FN(lanes_frustum_build)(rays, s->live_rays, nlive, &lf);
-        lanes_triangles view = b->tris;
-        view.v0x += nd->first, view.v0y += nd->first, view.v0z += nd->first;
-        view.v1x += nd->first, view.v1y += nd->first, view.v1z += nd->first;
-        view.v2x += nd->first, view.v2y += nd->first, view.v2z += nd->first;
+        lanes_triangles view = lanes_triangles_view(&b->tris, nd->first, ntri);
         LANES_FN(lanes_frustum_tris)(&lf, &view, ntri, LANES_CULL_BOTH, keep_bits, NULL);
         culled_any = true;
     }
