@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <time.h>
 #include <unistd.h>
 
 static const char *const queue_names[LANES_QUEUE_COUNT] = {"none", "MAX", "CORNER", "arrival"};
@@ -560,13 +559,6 @@ static uint32_t *subtree_counts(const lanes_bvh2 *b)
     return count;
 }
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
                          const lanes_packet_render_options *opt, lanes_render_result *out,
                          lanes_packet_metrics *metrics, lanes_error *err)
@@ -658,7 +650,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
     }
     if (ok) {
         pthread_mutex_init(&job.progress_lock, NULL);
-        double t0 = seconds_now();
+        double t0 = lanes_render_clock();
         int started = 1;
         for (int i = 1; i < threads; i++) {
             if (pthread_create(&tid[i], NULL, worker_main, &workers[i]) != 0) break;
@@ -668,7 +660,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
         for (int i = started; i < threads; i++) worker_main(&workers[i]);
         worker_main(&workers[0]);
         for (int i = 1; i < started; i++) pthread_join(tid[i], NULL);
-        out->seconds = seconds_now() - t0;
+        out->seconds = lanes_render_clock() - t0;
         pthread_mutex_destroy(&job.progress_lock);
     }
     for (int i = 0; i < inited; i++) {

@@ -198,7 +198,7 @@ static void *worker(void *p)
     return NULL;
 }
 
-static double now_seconds(void)
+double lanes_render_clock(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -258,7 +258,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
     if (threads > 256) threads = 256;
     worker_arg args[256];
     pthread_t tid[256];
-    double t0 = now_seconds();
+    double t0 = lanes_render_clock();
     int started = 0;
     size_t shadow_room = (size_t)lanes_max_shadow_rays(scene, opt->area_samples) + 1;
     for (int i = 0; i < threads; i++) {
@@ -278,7 +278,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
     }
     worker(&args[0]); /* the calling thread works too */
     for (int i = 1; i < started; i++) pthread_join(tid[i], NULL);
-    out->seconds = now_seconds() - t0;
+    out->seconds = lanes_render_clock() - t0;
     pthread_mutex_destroy(&job.progress_lock);
 
     for (int i = 0; i < started; i++) {

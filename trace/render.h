@@ -62,6 +62,9 @@ bool lanes_accel_build(const lanes_scene *scene, int wide_width, int threads, la
                        lanes_error *err);
 void lanes_accel_free(lanes_accel *a);
 
+/* Monotonic wall time in seconds, the clock both renderers time with. */
+double lanes_render_clock(void);
+
 bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
                   const lanes_render_options *opt, lanes_render_result *out, lanes_error *err);
 void lanes_render_result_free(lanes_render_result *r);
