@@ -183,7 +183,7 @@ static void packet_work(const lanes_job *j, size_t b, size_t e)
         lanes_rays view = lanes_rays_view(&j->soa, p, n);
         lanes_frustum f;
         j->k->frustum_build(&view, NULL, n, &f);
-        lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, j->occlusion};
+        lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_ACCURACY_DEFAULT, &f, true, false, j->occlusion};
         j->k->trace_packet(j->bvh2, &po, &view, j->prim + p, j->u + p, j->v + p,
                            j->occluded ? j->occluded + p : NULL, NULL);
     }
@@ -244,17 +244,17 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     }
     if (j->occlusion) {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->occluded_wide(j->wide, j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b,
+            j->k->occluded_wide(j->wide, j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b,
                                 j->occluded + b, NULL);
         else
-            j->k->occluded_bvh2(j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->occluded + b,
+            j->k->occluded_bvh2(j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->occluded + b,
                                 NULL);
     } else {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->trace_wide(j->wide, j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->hits + b,
+            j->k->trace_wide(j->wide, j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->hits + b,
                              NULL);
         else
-            j->k->trace_bvh2(j->bvh2, LANES_TRI_MOLLER, j->rays + b, e - b, j->hits + b, NULL);
+            j->k->trace_bvh2(j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->hits + b, NULL);
     }
 }
 
@@ -739,7 +739,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             } else {
                 /* the blockers behind the two answers, one ray each */
                 lanes_hit lh, eh;
-                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, LANES_TRI_MOLLER, &rays[r], 1,
+                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, LANES_ACCURACY_DEFAULT, &rays[r], 1,
                                         &lh, NULL);
                 lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
                 classify(&c->scene, &rays[r], &lh, &eh, a);

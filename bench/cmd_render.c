@@ -11,6 +11,7 @@
 #include "build/scene_load.h"
 #include "trace/packet_render.h"
 #include "trace/render.h"
+#include "trace/scene_plan.h"
 
 typedef struct {
     bool tty;
@@ -33,17 +34,17 @@ static void show_progress(void *ctx, double fraction)
 static int render_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
     const char *scene_spec = NULL, *out_path = NULL, *value;
-    const char *scheme_name = "wide", *queue_name = "MAX", *algo_name = "moller";
+    const char *scheme_name = "wide", *queue_name = "MAX", *accuracy_name = NULL;
     lanes_packet_render_options po;
     lanes_packet_render_default_options(&po);
-    bool no_frustum = false;
+    bool no_frustum = false, explain = false;
 
     cli_args a = cli_args_begin(ctx, self, argc, argv);
     while (cli_args_next(&a)) {
         if (cli_value(&a, "-o", &out_path) || cli_value(&a, "--output", &out_path)) {
         } else if (cli_value(&a, "--scheme", &scheme_name)) {
         } else if (cli_value(&a, "--queue", &queue_name)) {
-        } else if (cli_value(&a, "--algo", &algo_name)) {
+        } else if (cli_value(&a, "--accuracy", &accuracy_name)) {
         } else if (cli_value(&a, "--queue-min", &value)) {
             po.queue_min = (int)cli_parse_count(&a, "--queue-min", value, 1, 1u << 30);
         } else if (cli_value(&a, "--packet", &value)) {
@@ -63,6 +64,8 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
             po.base.height = h;
         } else if (cli_flag(&a, "--no-frustum")) {
             no_frustum = true;
+        } else if (cli_flag(&a, "--explain")) {
+            explain = true;
         } else if (cli_flag(&a, "--leaf-frustum")) {
             po.leaf_frustum = true;
         } else if (cli_global_option(&a)) {
@@ -81,12 +84,9 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     int queue = lanes_queue_from_name(queue_name);
     if (queue < 0)
         cli_usage_error(ctx, self, "unknown queue heuristic '%s' (MAX, CORNER, none, arrival)", queue_name);
-    if (strcmp(algo_name, "moller") == 0)
-        po.base.algo = LANES_TRI_MOLLER;
-    else if (strcmp(algo_name, "watertight") == 0)
-        po.base.algo = LANES_TRI_WATERTIGHT;
-    else
-        cli_usage_error(ctx, self, "unknown triangle test '%s' (moller, watertight)", algo_name);
+    int accuracy = accuracy_name ? lanes_accuracy_from_name(accuracy_name) : -1;
+    if (accuracy_name && accuracy < 0)
+        cli_usage_error(ctx, self, "unknown accuracy mode '%s' (fast, default, robust)", accuracy_name);
     po.queue = (lanes_queue_heuristic)queue;
     po.scheme = strcmp(scheme_name, "ranged") == 0 ? LANES_PACKET_RANGED : LANES_PACKET_PARTITION;
     if (no_frustum) po.frustum = po.corner_test = po.leaf_frustum = false;
@@ -98,6 +98,10 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     lanes_scene scene;
     lanes_error err;
     if (!lanes_scene_load(scene_spec, &scene, &err)) cli_fail("%s", err.message);
+    lanes_scene_plan plan;
+    lanes_scene_plan_make(&scene, accuracy, &plan);
+    po.base.accuracy = plan.accuracy;
+    if (explain) lanes_scene_plan_explain(&plan, stdout);
     lanes_accel accel;
     uint64_t t0 = cli_now_ns();
     if (!lanes_accel_build(&scene, packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
@@ -133,7 +137,7 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     printf("%s: %zu triangles, BVH built in %.3f s\n", scene.name, scene.triangle_count, build_s);
     printf("rendered %dx%d, %d spp, scheme %s", r.width, r.height, po.base.spp, scheme_name);
     if (packets) printf(" (packets of %d, queue %s, queue size %d)", po.packet_size, lanes_queue_name(po.queue), po.queue_min);
-    printf(", isa %s (%d lanes), %s triangles\n", k->name, k->lanes, algo_name);
+    printf(", isa %s (%d lanes), accuracy %s\n", k->name, k->lanes, lanes_accuracy_name(po.base.accuracy));
     printf("rays: %llu camera, %llu shadow, %llu reflected/refracted; %.3f s; %.2f Mrays/s\n",
            (unsigned long long)r.camera_rays, (unsigned long long)r.shadow_rays,
            (unsigned long long)r.secondary_rays, r.seconds,
@@ -160,7 +164,9 @@ const cli_command cli_cmd_render = {
              "  --packet N            rays per packet, at most 1024 (default 1024)\n"
              "  --no-frustum          packets without frustum culling\n"
              "  --leaf-frustum        rebuild a frustum from the live rays at each leaf (Wu 2.2.3)\n"
-             "  --algo A              triangle test: moller (default), watertight\n"
+             "  --accuracy M          fast, default or robust (see --explain); default: the scene\n"
+             "                        file's \"accuracy\", else default\n"
+             "  --explain             print what the scene needs (passes, data, accuracy) and why\n"
              "  --spp N               samples per pixel (default 1)\n"
              "  --size WxH            image size (default: the scene camera's)\n"
              "  --depth N             specular bounces (default 10)\n"

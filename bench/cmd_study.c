@@ -284,7 +284,7 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
                     lanes_rays_view(&soa, p, n - p < LANES_PACKET_MAX_RAYS ? n - p : LANES_PACKET_MAX_RAYS);
                 lanes_frustum f;
                 k->frustum_build(&view, NULL, view.count, &f);
-                lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_TRI_MOLLER, &f, true, false, false};
+                lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_ACCURACY_DEFAULT, &f, true, false, false};
                 k->trace_packet(bvh, &po, &view, prim + p, u + p, v + p, NULL, NULL);
             }
             t[rep] = (double)(cli_now_ns() - t0) * 1e-9;

@@ -28,6 +28,7 @@ void lanes_scene_init(lanes_scene *scene)
     c->fov_y_degrees = 45.0f;
     c->width = 512;
     c->height = 512;
+    scene->accuracy = -1;
 }
 
 void lanes_scene_free(lanes_scene *scene)

@@ -11,6 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "trace/accuracy.h"
+
 typedef enum lanes_material_kind {
     LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo */
     LANES_MAT_MIRROR,       /* perfect specular reflection, color = reflectance */
@@ -58,6 +60,9 @@ typedef struct lanes_scene {
     lanes_area_light *area_lights;
     size_t area_light_count;
     lanes_camera camera;
+    /* The lanes_accuracy a scene file asks for ("accuracy"), or -1: the
+     * renderer's choice. */
+    int accuracy;
     /* Allocated lengths (in elements) of the arrays above, kept by the
      * append helpers below so appending is amortized O(1). A scene filled
      * by hand may leave them 0: the helpers then reallocate on the next

@@ -762,7 +762,8 @@ static bool parse_scene(ctx *c, const cJSON *root)
 {
     if (!cJSON_IsObject(root))
         return fail(c, "the top level must be an object, found %s", type_name(root));
-    static const char *const keys[] = {"name", "camera", "materials", "objects", "lights", NULL};
+    static const char *const keys[] = {"name",   "camera",   "materials", "objects",
+                                       "lights", "accuracy", NULL};
     if (!check_keys(c, root, keys, "the scene"))
         return false;
     const cJSON *e;
@@ -775,6 +776,19 @@ static bool parse_scene(ctx *c, const cJSON *root)
         if (!ok)
             return false;
         snprintf(c->s->name, sizeof c->s->name, "%s", name);
+    }
+    if ((e = member(root, "accuracy"))) {
+        const char *mode = NULL;
+        push_key(c, "accuracy");
+        ok = get_string(c, e, &mode);
+        if (ok) {
+            c->s->accuracy = lanes_accuracy_from_name(mode);
+            ok = c->s->accuracy >= 0 ||
+                 fail(c, "unknown accuracy mode '%s' (valid: fast, default, robust)", mode);
+        }
+        pop(c);
+        if (!ok)
+            return false;
     }
     const cJSON *mats = member(root, "materials");
     if (!mats)

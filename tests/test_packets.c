@@ -193,8 +193,13 @@ int main(void)
             skipped++;
             continue;
         }
+        /* default and robust modes: their rays carry exact reciprocals, as
+         * the single-ray reference's do (fast mode's estimate differs
+         * between lanes_ray_prepare_rcp and the set's rays_prepare) */
         for (int algo = 0; algo < LANES_TRI_ALGO_COUNT; algo++)
             for (int c = 0; c < ncases; c++) {
+                const lanes_accuracy acc = algo == LANES_TRI_WATERTIGHT ? LANES_ACCURACY_ROBUST
+                                                                        : LANES_ACCURACY_DEFAULT;
                 packet_case *pc = &cases[c];
                 lanes_ray prepared[LANES_PACKET_MAX_RAYS];
                 for (size_t i = 0; i < pc->n; i++) {
@@ -203,8 +208,8 @@ int main(void)
                 }
                 /* The reference is the same set's single-ray traversal: the
                  * same arithmetic per ray and triangle, so t must match bitwise. */
-                k->trace_bvh2(&bvh, (lanes_tri_algo)algo, prepared, pc->n, ref_hit, NULL);
-                k->occluded_bvh2(&bvh, (lanes_tri_algo)algo, prepared, pc->n, ref_occ, NULL);
+                k->trace_bvh2(&bvh, acc, prepared, pc->n, ref_hit, NULL);
+                k->occluded_bvh2(&bvh, acc, prepared, pc->n, ref_occ, NULL);
                 for (int variant = 0; variant < 16; variant++) {
                     lanes_packet_options po;
                     memset(&po, 0, sizeof po);
@@ -212,7 +217,7 @@ int main(void)
                     bool use_frustum = variant & 2;
                     po.corner_test = variant & 4;
                     po.leaf_frustum = variant & 8;
-                    po.algo = (lanes_tri_algo)algo;
+                    po.accuracy = acc;
                     for (int occlusion = 0; occlusion < 2; occlusion++) {
                         po.occlusion = occlusion;
                         pk.count = pc->n;

@@ -51,7 +51,7 @@ static bool render_with(const lanes_scene *scene, lanes_isa isa, int size, const
     lanes_render_default_options(&opt);
     opt.isa = isa;
     opt.scheme = LANES_SCHEME_WIDE;
-    opt.algo = LANES_TRI_MOLLER;
+    opt.accuracy = LANES_ACCURACY_DEFAULT;
     opt.width = opt.height = size;
     bool ok = lanes_render(scene, &accel, &opt, res, &err);
     lanes_accel_free(&accel);

@@ -7,7 +7,7 @@
 #include "trace/kernel_common.h"
 
 /* The entry and exit of rays against one box, SIMD across rays. */
-LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *entry, bool robust)
+LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *entry, float exit_scale)
 {
     vfloat t1, t2, tin = r->tnear, tout = r->tfar;
     vmask neg;
@@ -38,8 +38,8 @@ LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *en
     tout = vf_min(vf_select(neg, t1, t2), tout);
 
     *entry = tin;
-    /* robust: the exit widened as in traversal (LANES_ROBUST_SCALE) */
-    if (robust) tout = vf_mul(tout, vf_set1(LANES_ROBUST_SCALE));
+    /* 1, or LANES_ROBUST_SCALE in robust traversal */
+    tout = vf_mul(tout, vf_set1(exit_scale));
     return vm_and(vf_le(tin, tout), r->live);
 }
 

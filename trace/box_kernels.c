@@ -21,7 +21,7 @@ LANES_BODY size_t box_packet_body(const lanes_rays *rays, const uint32_t *idx, s
     for (size_t i = 0; i < n; i += LANES_W) {
         lanes_vray r = lanes_load_rays(rays, idx, i, n, false, true);
         vfloat entry;
-        vmask m = box_vs_rays(&r, box, &entry, false);
+        vmask m = box_vs_rays(&r, box, &entry, 1.0f);
         LANES_COUNT(stats, r.live);
         lanes_put_bits(hit, i, m);
         if (tentry) vf_store_masked(tentry + i, m, entry);
@@ -46,7 +46,7 @@ LANES_BODY size_t box_partition_body(const lanes_rays *rays, const uint32_t *idx
     for (size_t i = 0; i < n; i += LANES_W) {
         lanes_vray r = lanes_load_rays(rays, idx, i, n, false, true);
         vfloat entry;
-        vmask m = box_vs_rays(&r, box, &entry, false);
+        vmask m = box_vs_rays(&r, box, &entry, 1.0f);
         LANES_COUNT(stats, r.live);
         vint id;
         if (idx && n - i >= LANES_W) {

@@ -108,11 +108,4 @@ LANES_BODY lanes_vray lanes_load_rays(const lanes_rays *r, const uint32_t *idx, 
 /* Unit roundoff of float, for the outward widening of conservative bounds. */
 #define LANES_U 0x1p-24f
 
-/* 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", 2013): the slab exit
- * scaled by this is never below the exact exit, whatever the three
- * roundings of (plane - o) * (1/d) did. Traversal must use it: a ray that
- * passes exactly through a box's edge or corner (aimed at a mesh vertex) can
- * otherwise see entry > exit by one rounding and lose the triangle there. */
-#define LANES_ROBUST_SCALE 0x1.000006p+0f
-
 #endif

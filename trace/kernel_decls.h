@@ -50,15 +50,15 @@ size_t LANES_FN(lanes_frustum_tris)(const lanes_frustum *f, const lanes_triangle
 struct lanes_bvh2;
 struct lanes_wbvh;
 void LANES_FN(lanes_trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                                lanes_tri_algo algo, const lanes_ray *rays, size_t n,
+                                lanes_accuracy accuracy, const lanes_ray *rays, size_t n,
                                 lanes_hit *hits, lanes_trace_stats *stats);
 void LANES_FN(lanes_occluded_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                                   lanes_tri_algo algo, const lanes_ray *rays, size_t n,
+                                   lanes_accuracy accuracy, const lanes_ray *rays, size_t n,
                                    uint8_t *occluded, lanes_trace_stats *stats);
-void LANES_FN(lanes_trace_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo,
+void LANES_FN(lanes_trace_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy,
                                 const lanes_ray *rays, size_t n, lanes_hit *hits,
                                 lanes_trace_stats *stats);
-void LANES_FN(lanes_occluded_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo,
+void LANES_FN(lanes_occluded_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy,
                                    const lanes_ray *rays, size_t n, uint8_t *occluded,
                                    lanes_trace_stats *stats);
 void LANES_FN(lanes_trace_packet)(const struct lanes_bvh2 *b, const lanes_packet_options *opt,

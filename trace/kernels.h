@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "simd/isa.h"
+#include "trace/accuracy.h"
 
 #define LANES_MAX_W 16
 #define LANES_ALIGN 64
@@ -86,6 +87,31 @@ typedef enum lanes_rcp_mode {
     LANES_RCP_FAST = 1,   /* hardware estimate plus one Newton step */
     LANES_RCP_MODE_COUNT
 } lanes_rcp_mode;
+
+/* 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", 2013): the slab exit
+ * scaled by this is never below the exact exit, whatever the three
+ * roundings of (plane - o) * (1/d) did. Without it a ray that passes exactly
+ * through a box's edge or corner (aimed at a mesh vertex) can see entry >
+ * exit by one rounding and lose the triangle there. */
+#define LANES_ROBUST_SCALE 0x1.000006p+0f
+
+/* What an accuracy mode (accuracy.h) switches on in the kernels. */
+typedef struct lanes_precision {
+    lanes_rcp_mode rcp;
+    lanes_tri_algo algo;
+    float exit_scale; /* box exits are multiplied by this: 1 or LANES_ROBUST_SCALE */
+} lanes_precision;
+
+static inline lanes_precision lanes_accuracy_precision(lanes_accuracy a)
+{
+    lanes_precision p = {LANES_RCP_EXACT, LANES_TRI_MOLLER, 1.0f};
+    if (a == LANES_ACCURACY_FAST) p.rcp = LANES_RCP_FAST;
+    if (a == LANES_ACCURACY_ROBUST) {
+        p.algo = LANES_TRI_WATERTIGHT;
+        p.exit_scale = LANES_ROBUST_SCALE;
+    }
+    return p;
+}
 
 /* Results of the per-element triangle kernels. */
 typedef struct lanes_tri_hits {
@@ -178,7 +204,7 @@ typedef enum lanes_packet_scheme {
 /* Options of one packet trace. */
 typedef struct lanes_packet_options {
     lanes_packet_scheme scheme;
-    lanes_tri_algo algo;
+    lanes_accuracy accuracy; /* triangle test and box-exit widening; the rays are prepared by the caller */
     const lanes_frustum *frustum; /* the packet's frustum: nodes outside it are skipped; may be NULL */
     bool corner_test;   /* all four corner rays hit a node => all live rays do (before any elimination) */
     bool leaf_frustum;  /* rebuild a frustum from the live rays at each leaf and cull its triangles */
@@ -264,20 +290,20 @@ typedef struct lanes_kernels {
                            lanes_cull_method method, uint32_t *keep,
                            lanes_lane_stats *stats);
 
-    /* Single-ray traversal of n prepared rays (lanes_ray_prepare), one after
+    /* Single-ray traversal of n prepared rays (lanes_ray_prepare_rcp), one after
      * the other. The wide form reads a wide BVH of wide_width children
      * (SIMD across a node's children and across a leaf's triangles); the
      * BVH2 form visits two children at a time, as the thesis' "single"
      * baseline, and tests leaf triangles with the wide triangle kernel. */
     int wide_width;
-    void (*trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_tri_algo algo,
+    void (*trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,
                        const lanes_ray *rays, size_t n, lanes_hit *hits, lanes_trace_stats *stats);
     void (*occluded_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                          lanes_tri_algo algo, const lanes_ray *rays, size_t n, uint8_t *occluded,
+                          lanes_accuracy accuracy, const lanes_ray *rays, size_t n, uint8_t *occluded,
                           lanes_trace_stats *stats);
-    void (*trace_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+    void (*trace_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                        size_t n, lanes_hit *hits, lanes_trace_stats *stats);
-    void (*occluded_bvh2)(const struct lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+    void (*occluded_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                           size_t n, uint8_t *occluded, lanes_trace_stats *stats);
 
     /* One packet of rays->count (<= LANES_PACKET_MAX_RAYS) prepared rays
@@ -301,6 +327,9 @@ const lanes_kernels *lanes_kernels_for(lanes_isa isa);
 /* Scalar setup of one ray (reciprocal by division); returns false, and makes
  * the ray inactive, when it is invalid. */
 bool lanes_ray_prepare(lanes_ray *ray);
+/* The same with the reciprocal of an accuracy mode: LANES_RCP_FAST takes the
+ * SSE estimate plus one Newton step, as the kernels' fast mode does. */
+bool lanes_ray_prepare_rcp(lanes_ray *ray, lanes_rcp_mode mode);
 
 /* Allocation of padded, aligned SoA arrays; counts are checked against
  * overflow. Return false on failure (absurd size, out of memory). */

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <xmmintrin.h> /* SSE is part of the x86-64 baseline */
 
 #define DECLARE(suffix) extern const lanes_kernels lanes_kernels_##suffix;
 #ifdef LANES_HAVE_KSET_SCALAR
@@ -55,6 +56,23 @@ const lanes_kernels *lanes_kernels_for(lanes_isa isa)
 }
 
 const lanes_kernels *lanes_kernels_current(void) { return tables[lanes_isa_current()]; }
+
+/* The SSE estimate (12 bits) plus one Newton step, as the kernels' fast mode
+ * computes it; tiny components take the exact 1/d, as there (ray_kernels.c). */
+static float fast_rcp(float d)
+{
+    if (fabsf(d) < 0x1p-60f) return 1.0f / d;
+    float r = _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(d)));
+    return r * (2.0f - d * r);
+}
+
+bool lanes_ray_prepare_rcp(lanes_ray *ray, lanes_rcp_mode mode)
+{
+    bool ok = lanes_ray_prepare(ray);
+    if (ok && mode == LANES_RCP_FAST)
+        for (int a = 0; a < 3; a++) ray->rd[a] = fast_rcp(ray->d[a]);
+    return ok;
+}
 
 bool lanes_ray_prepare(lanes_ray *ray)
 {

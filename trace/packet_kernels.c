@@ -142,7 +142,7 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
             if (!masks[g]) continue;
             lanes_vray r = group_rays(rays, g, masks[g], true, false);
             if (stats) LANES_COUNT(&stats->tri_ops, r.live);
-            tri_result h = tri_vs_rays(opt->algo, &r, &tri, !opt->occlusion);
+            tri_result h = tri_vs_rays(lanes_accuracy_precision(opt->accuracy).algo, &r, &tri, !opt->occlusion);
             if (vm_none(h.hit)) continue;
             size_t at = (size_t)g * LANES_W;
             if (opt->occlusion) {
@@ -173,6 +173,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
     packet_scratch s;
     packet_entry stack[2 * MAX_DEPTH + 2];
     const bool ranged = opt->scheme == LANES_PACKET_RANGED;
+    const float exit_scale = lanes_accuracy_precision(opt->accuracy).exit_scale;
     size_t n = rays->count < LANES_PACKET_MAX_RAYS ? rays->count : LANES_PACKET_MAX_RAYS;
     uint32_t ngroups = (uint32_t)((n + LANES_W - 1) / LANES_W);
     if (stats) {
@@ -221,7 +222,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, first, in[first], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                if (vm_any(box_vs_rays(&r, &box, &entry, true))) {
+                if (vm_any(box_vs_rays(&r, &box, &entry, exit_scale))) {
                     found = true;
                     break;
                 }
@@ -231,7 +232,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, last, in[last], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                if (vm_any(box_vs_rays(&r, &box, &entry, true))) break;
+                if (vm_any(box_vs_rays(&r, &box, &entry, exit_scale))) break;
             }
             for (uint32_t g = first; g <= last; g++) {
                 lanes_vray r = lanes_load_rays(rays, NULL, (size_t)g * LANES_W, n, false, false);
@@ -255,7 +256,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
                 lanes_vray r = group_rays(rays, g, in[g], false, true);
                 if (stats) LANES_COUNT(&stats->box_ops, r.live);
                 vfloat entry;
-                uint32_t m = vm_bits(box_vs_rays(&r, &box, &entry, true));
+                uint32_t m = vm_bits(box_vs_rays(&r, &box, &entry, exit_scale));
                 if (!m) continue;
                 out[g] = (uint16_t)m;
                 live_rays += (uint64_t)__builtin_popcount(m);

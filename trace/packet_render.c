@@ -1,6 +1,7 @@
 /* The Whitted renderer on ray packets (see packet_render.h). */
 #define _DEFAULT_SOURCE /* sysconf, clock_gettime */
 #include "trace/packet_render.h"
+#include "trace/scene_plan.h"
 #include "trace/shading.h"
 
 #include <pthread.h>
@@ -106,12 +107,13 @@ typedef struct {
     const lanes_packet_render_options *opt;
     const lanes_kernels *k;
     float eps;
+    lanes_scene_plan plan;
     vec3 eye, fwd, right, up;
     float tan_half, aspect;
     int width, height, side, qx, qy;     /* primary packets: side x side pixels, qx x qy of them */
     uint32_t *quad_order;                /* quadrants in Hilbert order */
     size_t quads;
-    uint32_t *subtree;                   /* triangles under each BVH2 node */
+    uint32_t *subtree;                   /* triangles under each BVH2 node; only with a specular pass */
     float root_lo[3], root_hi[3];
     float *rgb;
     atomic_int quads_done;
@@ -171,9 +173,9 @@ static void trace_filled_packet(worker_t *w, lanes_ray_type type, bool occlusion
     const lanes_packet_render_options *opt = job->opt;
     size_t n = w->pk.count;
     lanes_frustum f;
-    lanes_packet_options po = {opt->scheme, opt->base.algo, NULL, opt->corner_test,
+    lanes_packet_options po = {opt->scheme, opt->base.accuracy, NULL, opt->corner_test,
                                opt->leaf_frustum, occlusion};
-    job->k->rays_prepare(&w->pk, LANES_RCP_EXACT);
+    job->k->rays_prepare(&w->pk, lanes_accuracy_precision(opt->base.accuracy).rcp);
     if (opt->frustum) {
         job->k->frustum_build(&w->pk, NULL, n, &f);
         po.frustum = &f;
@@ -222,14 +224,14 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
         add_pixel(job, r->pixel, v3_mul(r->weight, lanes_background(r->d)));
         return;
     }
-    lanes_surface sf = lanes_surface_at(s, h, r->d);
+    lanes_surface sf = job->plan.hit_geometry ? lanes_surface_at(s, h, r->d) : lanes_surface_material(s, h);
     switch (sf.m->kind) {
     case LANES_MAT_EMISSIVE:
         add_pixel(job, r->pixel, v3_mul(r->weight, v3_load(sf.m->emission)));
         break;
     case LANES_MAT_DIFFUSE: {
         vec3 ambient;
-        int n = lanes_diffuse_light(s, &sf, r->weight, r->seed, job->eps, job->opt->base.area_samples,
+        int n = lanes_diffuse_light(s, &sf, r->weight, r->seed, job->opt->base.accuracy, job->eps, job->opt->base.area_samples,
                                     w->shadow_tmp, &ambient);
         add_pixel(job, r->pixel, ambient);
         for (int i = 0; i < n; i++) {
@@ -254,7 +256,7 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
     case LANES_MAT_GLASS: {
         if (depth >= job->opt->base.max_depth) break;
         lanes_bounce_ray b[2];
-        int n = lanes_specular_rays(&sf, r->d, r->weight, r->seed, job->eps, b);
+        int n = lanes_specular_rays(&sf, r->d, r->weight, r->seed, job->opt->base.accuracy, job->eps, b);
         for (int i = 0; i < n; i++)
             if (!push_ray(&w->queue[1], (pending_ray){b[i].o, b[i].d, b[i].weight, r->pixel, b[i].seed}))
                 w->failed = true;
@@ -605,6 +607,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
     job.qy = (job.height + side - 1) / side;
     job.quads = (size_t)job.qx * (size_t)job.qy;
     job.eps = lanes_scene_epsilon(scene);
+    lanes_scene_plan_make(scene, opt->base.accuracy, &job.plan);
     const lanes_camera *c = &scene->camera;
     job.eye = v3_load(c->eye);
     job.fwd = v3_normalize(v3_sub(v3_load(c->target), job.eye));
@@ -620,9 +623,10 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
     while (grid < (uint32_t)job.qx || grid < (uint32_t)job.qy) grid *= 2;
     uint64_t *order = malloc(job.quads * sizeof *order);
     job.quad_order = malloc(job.quads * sizeof *job.quad_order);
-    job.subtree = subtree_counts(&accel->bvh2);
+    /* the specular queues' nodes: not needed when no ray is reflected */
+    job.subtree = job.plan.specular_pass ? subtree_counts(&accel->bvh2) : NULL;
     job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
-    bool ok = order && job.quad_order && job.subtree && job.rgb;
+    bool ok = order && job.quad_order && (job.subtree || !job.plan.specular_pass) && job.rgb;
     if (ok) {
         for (uint32_t q = 0; q < job.quads; q++) {
             uint32_t x = q % (uint32_t)job.qx, y = q / (uint32_t)job.qx;

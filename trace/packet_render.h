@@ -39,7 +39,7 @@ typedef enum lanes_ray_type {
 const char *lanes_ray_type_name(lanes_ray_type t);
 
 typedef struct lanes_packet_render_options {
-    lanes_render_options base;     /* isa, algo, size, spp, threads, depth, area samples, progress */
+    lanes_render_options base;     /* isa, accuracy, size, spp, threads, depth, area samples, progress */
     lanes_packet_scheme scheme;    /* partition or ranged */
     lanes_queue_heuristic queue;
     int queue_min;                 /* queue nodes: deepest BVH nodes holding >= this many triangles */

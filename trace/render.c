@@ -2,6 +2,7 @@
  * table of the chosen set; threads take 16x16 tiles from a shared counter. */
 #define _DEFAULT_SOURCE /* sysconf(_SC_NPROCESSORS_ONLN), clock_gettime */
 #include "trace/render.h"
+#include "trace/scene_plan.h"
 #include "trace/shading.h"
 
 #include <math.h>
@@ -31,7 +32,7 @@ void lanes_render_default_options(lanes_render_options *o)
     memset(o, 0, sizeof *o);
     o->isa = lanes_isa_current();
     o->scheme = LANES_SCHEME_WIDE;
-    o->algo = LANES_TRI_MOLLER;
+    o->accuracy = LANES_ACCURACY_DEFAULT;
     o->width = 0; /* the scene camera's size */
     o->height = 0;
     o->spp = 1;
@@ -68,6 +69,8 @@ typedef struct {
     const lanes_render_options *opt;
     const lanes_kernels *k;
     float eps;          /* offset of secondary origins, scaled to the scene */
+    lanes_rcp_mode rcp; /* of the accuracy mode */
+    lanes_scene_plan plan;
     vec3 cam_eye, cam_fwd, cam_right, cam_up;
     float *rgb;
     int width, height, tiles_x, tiles_y;
@@ -85,11 +88,11 @@ static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float
 {
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
     lanes_hit h;
-    lanes_ray_prepare(&r);
+    lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->trace_wide(&job->accel->wide, &job->accel->bvh2, job->opt->algo, &r, 1, &h, NULL);
+        job->k->trace_wide(&job->accel->wide, &job->accel->bvh2, job->opt->accuracy, &r, 1, &h, NULL);
     else
-        job->k->trace_bvh2(&job->accel->bvh2, job->opt->algo, &r, 1, &h, NULL);
+        job->k->trace_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &h, NULL);
     return h;
 }
 
@@ -97,11 +100,11 @@ static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar)
 {
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
     uint8_t hit = 0;
-    lanes_ray_prepare(&r);
+    lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->occluded_wide(&job->accel->wide, &job->accel->bvh2, job->opt->algo, &r, 1, &hit, NULL);
+        job->k->occluded_wide(&job->accel->wide, &job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, NULL);
     else
-        job->k->occluded_bvh2(&job->accel->bvh2, job->opt->algo, &r, 1, &hit, NULL);
+        job->k->occluded_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, NULL);
     return hit != 0;
 }
 
@@ -112,13 +115,13 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
     const lanes_scene *s = job->scene;
     lanes_hit h = trace(job, o, d, 0.0f, INFINITY);
     if (h.prim == LANES_NO_HIT) return v3_mul(weight, lanes_background(d));
-    lanes_surface sf = lanes_surface_at(s, &h, d);
+    lanes_surface sf = job->plan.hit_geometry ? lanes_surface_at(s, &h, d) : lanes_surface_material(s, &h);
     switch (sf.m->kind) {
     case LANES_MAT_EMISSIVE:
         return v3_mul(weight, v3_load(sf.m->emission));
     case LANES_MAT_DIFFUSE: {
         vec3 sum;
-        int n = lanes_diffuse_light(s, &sf, weight, seed, job->eps, job->opt->area_samples, shadow, &sum);
+        int n = lanes_diffuse_light(s, &sf, weight, seed, job->opt->accuracy, job->eps, job->opt->area_samples, shadow, &sum);
         for (int i = 0; i < n; i++) {
             count->shadow++;
             if (!occluded(job, shadow[i].o, shadow[i].d, shadow[i].tfar)) sum = v3_add(sum, shadow[i].add);
@@ -129,7 +132,7 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
     case LANES_MAT_GLASS: {
         if (depth >= job->opt->max_depth) return v3(0, 0, 0);
         lanes_bounce_ray b[2];
-        int n = lanes_specular_rays(&sf, d, weight, seed, job->eps, b);
+        int n = lanes_specular_rays(&sf, d, weight, seed, job->opt->accuracy, job->eps, b);
         vec3 sum = v3(0, 0, 0);
         for (int i = 0; i < n; i++) {
             count->secondary++;
@@ -237,6 +240,8 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
         return false;
     }
     job.eps = lanes_scene_epsilon(scene);
+    job.rcp = lanes_accuracy_precision(opt->accuracy).rcp;
+    lanes_scene_plan_make(scene, opt->accuracy, &job.plan);
 
     const lanes_camera *c = &scene->camera;
     job.cam_eye = v3_load(c->eye);

@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "build/scene.h"
 #include "trace/kernels.h"
@@ -77,6 +78,49 @@ static inline lanes_surface lanes_surface_at(const lanes_scene *s, const lanes_h
     return sf;
 }
 
+/* The origin of a ray leaving a surface at p, on the side the geometric
+ * normal n (unit length) points to.
+ *
+ * Fast and default modes move p along n by the scene epsilon: right while
+ * the scene's coordinates are small against its size, wrong (self-hits) once
+ * the rounding of p, a few ulps of |p|, exceeds the epsilon.
+ *
+ * Robust mode follows Wächter and Binder (Ray Tracing Gems, ch. 6, 2019):
+ * the rounding error of p grows with |p|, so each coordinate moves by a
+ * fixed number of ulps (256 * n, in the integer representation) rather than
+ * by a distance; near the origin, where ulps vanish, by 2^-16 * n instead.
+ * p must come from the barycentrics (lanes_surface_at), so that its error
+ * is that of one interpolation, not of o + t d. */
+static inline float lanes_offset_coordinate(float p, float n)
+{
+    const float near_origin = 1.0f / 32.0f;
+    if (fabsf(p) < near_origin) return p + 0x1p-16f * n;
+    int32_t bits, steps = (int32_t)(256.0f * n);
+    memcpy(&bits, &p, sizeof bits);
+    /* ulps count away from zero on the negative side too */
+    bits += p < 0.0f ? -steps : steps;
+    float moved;
+    memcpy(&moved, &bits, sizeof moved);
+    return isfinite(moved) ? moved : p;
+}
+
+static inline vec3 lanes_offset_origin(vec3 p, vec3 n, lanes_accuracy mode, float eps)
+{
+    if (mode != LANES_ACCURACY_ROBUST) return v3_add(p, v3_scale(n, eps));
+    return v3(lanes_offset_coordinate(p.x, n.x), lanes_offset_coordinate(p.y, n.y),
+              lanes_offset_coordinate(p.z, n.z));
+}
+
+/* The material alone, for renders whose shading reads no hit geometry
+ * (lanes_scene_plan.hit_geometry false): no barycentrics, no normal. */
+static inline lanes_surface lanes_surface_material(const lanes_scene *s, const lanes_hit *h)
+{
+    lanes_surface sf;
+    memset(&sf, 0, sizeof sf);
+    sf.m = &s->materials[s->material_of[h->prim]];
+    return sf;
+}
+
 /* A shadow ray and what it adds when unoccluded. light: the point light's
  * index, or point_light_count + the area light's index. */
 typedef struct {
@@ -90,11 +134,11 @@ typedef struct {
  * `add` when the ray is unoccluded. Writes at most
  * point_light_count + area_light_count * area_samples rays. */
 static inline int lanes_diffuse_light(const lanes_scene *s, const lanes_surface *sf, vec3 weight,
-                                      uint32_t seed, float eps, int area_samples,
+                                      uint32_t seed, lanes_accuracy mode, float eps, int area_samples,
                                       lanes_shadow_ray *out, vec3 *ambient)
 {
     vec3 albedo = v3_mul(weight, v3_load(sf->m->color));
-    vec3 origin = v3_add(sf->p, v3_scale(sf->nf, eps));
+    vec3 origin = lanes_offset_origin(sf->p, sf->nf, mode, eps);
     int n = 0;
     *ambient = v3_scale(albedo, 0.03f); /* a little ambient, so unlit parts are not black */
     for (size_t i = 0; i < s->point_light_count; i++) {
@@ -145,10 +189,10 @@ static inline vec3 lanes_reflect(vec3 d, vec3 n) { return v3_sub(d, v3_scale(n, 
  * Fresnel term, or reflection alone under total internal reflection.
  * Returns the number of rays written (0 to 2). */
 static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weight, uint32_t seed,
-                                      float eps, lanes_bounce_ray out[2])
+                                      lanes_accuracy mode, float eps, lanes_bounce_ray out[2])
 {
     vec3 color = v3_mul(weight, v3_load(sf->m->color));
-    vec3 above = v3_add(sf->p, v3_scale(sf->nf, eps));
+    vec3 above = lanes_offset_origin(sf->p, sf->nf, mode, eps);
     if (sf->m->kind == LANES_MAT_MIRROR) {
         out[0] = (lanes_bounce_ray){above, lanes_reflect(d, sf->nf), color, seed * 31u + 7u};
         return 1;
@@ -169,13 +213,13 @@ static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weig
     float fresnel = r0 + (1.0f - r0) * powf(1.0f - cosi, 5.0f);
     vec3 refr_dir = v3_add(v3_scale(dn, eta), v3_scale(sf->nf, eta * cosi - sqrtf(k)));
     out[0] = (lanes_bounce_ray){above, refl_dir, v3_scale(color, fresnel), seed * 31u + 11u};
-    out[1] = (lanes_bounce_ray){v3_sub(sf->p, v3_scale(sf->nf, eps)), refr_dir,
+    out[1] = (lanes_bounce_ray){lanes_offset_origin(sf->p, v3_scale(sf->nf, -1.0f), mode, eps), refr_dir,
                                 v3_scale(color, 1.0f - fresnel), seed * 31u + 13u};
     return 2;
 }
 
-/* How far secondary origins are pushed off their surface: a fixed fraction
- * of the scene's size (the robust offsets of the accuracy issue replace it). */
+/* How far secondary origins are pushed off their surface in fast and
+ * default modes: a fixed fraction of the scene's size (see accuracy.h). */
 static inline float lanes_scene_epsilon(const lanes_scene *s)
 {
     float lo[3], hi[3];

@@ -22,14 +22,15 @@ typedef struct {
 
 /* Entry of one ray into the children j .. j+LANES_W-1 of a wide node (slab
  * test as in box_kernels.c: near planes by the ray's octant, NaN slab
- * distances ignored by operand order), with the exit widened by
- * LANES_ROBUST_SCALE so no box a ray really touches is skipped. */
+ * distances ignored by operand order). In robust mode the exit is widened
+ * by LANES_ROBUST_SCALE so no box a ray really touches is skipped; the
+ * other modes take exit_scale = 1 and may lose a box by one rounding. */
 typedef struct {
     int near[3], far[3];
-    vfloat o[3], rd[3], tnear;
+    vfloat o[3], rd[3], tnear, exit_scale;
 } node_ray;
 
-static inline node_ray node_ray_setup(const lanes_ray *r)
+static inline node_ray node_ray_setup(const lanes_ray *r, float exit_scale)
 {
     node_ray n;
     for (int a = 0; a < 3; a++) {
@@ -39,6 +40,7 @@ static inline node_ray node_ray_setup(const lanes_ray *r)
         n.rd[a] = vf_set1(r->rd[a]);
     }
     n.tnear = vf_set1(r->tnear);
+    n.exit_scale = vf_set1(exit_scale);
     return n;
 }
 
@@ -52,7 +54,7 @@ LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, float tfar, 
             tin = vf_max(vf_mul(vf_sub(vf_load(node + r->near[a] * WIDE_WIDTH + j), r->o[a]), r->rd[a]), tin);
             tout = vf_min(vf_mul(vf_sub(vf_load(node + r->far[a] * WIDE_WIDTH + j), r->o[a]), r->rd[a]), tout);
         }
-        vmask m = vf_le(tin, vf_mul(tout, vf_set1(LANES_ROBUST_SCALE)));
+        vmask m = vf_le(tin, vf_mul(tout, r->exit_scale));
         vf_storeu(tentry + j, tin);
         bits |= vm_bits(m) << j;
     }
@@ -113,15 +115,17 @@ static inline void count_node(lanes_trace_stats *stats, const lanes_wbvh *wb, ui
 }
 
 /* Walks the wide BVH for one ray. any == true stops at the first hit. */
-LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_algo algo,
+LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                           const lanes_ray *ray, bool any, lanes_hit *hit, lanes_trace_stats *stats)
 {
+    const lanes_precision prec = lanes_accuracy_precision(accuracy);
+    const lanes_tri_algo algo = prec.algo;
     stack_entry stack[STACK_SIZE];
     float tentry[WIDE_WIDTH];
     float tfar = ray->tfar;
     bool found = false;
     if (!(ray->tnear <= ray->tfar)) return false;
-    node_ray nr = node_ray_setup(ray);
+    node_ray nr = node_ray_setup(ray, prec.exit_scale);
     wide_setup w = wide_setup_ray(algo, ray, &b->tris);
     int sp = 0;
     stack[sp++] = (stack_entry){0, 0, ray->tnear};
@@ -130,7 +134,7 @@ LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_a
         /* A node with one hit child goes straight on to it, without the
          * stack: the common case below the top levels. */
         for (;;) {
-            if (e.t > tfar * LANES_ROBUST_SCALE) break;
+            if (e.t > tfar * prec.exit_scale) break;
             if (e.count > 0) {
                 if (stats) stats->leaves_visited++;
                 if (any) {
@@ -174,7 +178,8 @@ LANES_BODY bool wide_walk(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_a
 }
 
 /* Slab test of one ray against one box, scalar, same conventions. */
-static inline bool box_hit1(const lanes_bvh2_node *nd, const lanes_ray *r, float tfar, float *t)
+static inline bool box_hit1(const lanes_bvh2_node *nd, const lanes_ray *r, float tfar,
+                            float exit_scale, float *t)
 {
     float tin = r->tnear, tout = tfar;
     for (int a = 0; a < 3; a++) {
@@ -185,12 +190,14 @@ static inline bool box_hit1(const lanes_bvh2_node *nd, const lanes_ray *r, float
         tout = tf < tout ? tf : tout;
     }
     *t = tin;
-    return tin <= tout * LANES_ROBUST_SCALE;
+    return tin <= tout * exit_scale;
 }
 
-LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *ray, bool any,
-                          lanes_hit *hit, lanes_trace_stats *stats)
+LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *ray,
+                          bool any, lanes_hit *hit, lanes_trace_stats *stats)
 {
+    const lanes_precision prec = lanes_accuracy_precision(accuracy);
+    const lanes_tri_algo algo = prec.algo;
     stack_entry stack[64 * 2];
     float tfar = ray->tfar;
     bool found = false;
@@ -198,11 +205,11 @@ LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_
     wide_setup w = wide_setup_ray(algo, ray, &b->tris);
     int sp = 0;
     float troot;
-    if (!box_hit1(&b->nodes[0], ray, tfar, &troot)) return false;
+    if (!box_hit1(&b->nodes[0], ray, tfar, prec.exit_scale, &troot)) return false;
     stack[sp++] = (stack_entry){0, 0, troot};
     while (sp > 0) {
         stack_entry e = stack[--sp];
-        if (e.t > tfar * LANES_ROBUST_SCALE) continue;
+        if (e.t > tfar * prec.exit_scale) continue;
         const lanes_bvh2_node *nd = &b->nodes[e.ref];
         if (nd->count > 0) {
             if (stats) stats->leaves_visited++;
@@ -220,8 +227,8 @@ LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_
             stats->node_lanes.active_lanes += 2;
         }
         float t0, t1;
-        bool h0 = box_hit1(&b->nodes[nd->first], ray, tfar, &t0);
-        bool h1 = box_hit1(&b->nodes[nd->first + 1], ray, tfar, &t1);
+        bool h0 = box_hit1(&b->nodes[nd->first], ray, tfar, prec.exit_scale, &t0);
+        bool h1 = box_hit1(&b->nodes[nd->first + 1], ray, tfar, prec.exit_scale, &t1);
         if (h0 && h1) {
             bool first_near = t0 <= t1;
             stack[sp++] = (stack_entry){nd->first + (first_near ? 1u : 0u), 0, first_near ? t1 : t0};
@@ -237,76 +244,76 @@ LANES_BODY bool bvh2_walk(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_
 
 static inline lanes_hit no_hit(void) { return (lanes_hit){INFINITY, 0.0f, 0.0f, LANES_NO_HIT}; }
 
-LANES_BODY void trace_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_algo algo,
+LANES_BODY void trace_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                                 const lanes_ray *rays, size_t n, lanes_hit *hits,
                                 lanes_trace_stats *stats)
 {
     for (size_t i = 0; i < n; i++) {
         hits[i] = no_hit();
-        wide_walk(wb, b, algo, &rays[i], false, &hits[i], stats);
+        wide_walk(wb, b, accuracy, &rays[i], false, &hits[i], stats);
     }
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_trace_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_algo algo,
+void LANES_FN(lanes_trace_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                                 const lanes_ray *rays, size_t n, lanes_hit *hits,
                                 lanes_trace_stats *stats)
 {
     if (stats)
-        trace_wide_body(wb, b, algo, rays, n, hits, stats);
+        trace_wide_body(wb, b, accuracy, rays, n, hits, stats);
     else
-        trace_wide_body(wb, b, algo, rays, n, hits, NULL);
+        trace_wide_body(wb, b, accuracy, rays, n, hits, NULL);
 }
 
-LANES_BODY void occluded_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_algo algo,
+LANES_BODY void occluded_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                                    const lanes_ray *rays, size_t n, uint8_t *occluded,
                                    lanes_trace_stats *stats)
 {
-    for (size_t i = 0; i < n; i++) occluded[i] = wide_walk(wb, b, algo, &rays[i], true, NULL, stats);
+    for (size_t i = 0; i < n; i++) occluded[i] = wide_walk(wb, b, accuracy, &rays[i], true, NULL, stats);
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_occluded_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_tri_algo algo,
+void LANES_FN(lanes_occluded_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                                    const lanes_ray *rays, size_t n, uint8_t *occluded,
                                    lanes_trace_stats *stats)
 {
     if (stats)
-        occluded_wide_body(wb, b, algo, rays, n, occluded, stats);
+        occluded_wide_body(wb, b, accuracy, rays, n, occluded, stats);
     else
-        occluded_wide_body(wb, b, algo, rays, n, occluded, NULL);
+        occluded_wide_body(wb, b, accuracy, rays, n, occluded, NULL);
 }
 
-LANES_BODY void trace_bvh2_body(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+LANES_BODY void trace_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                                 size_t n, lanes_hit *hits, lanes_trace_stats *stats)
 {
     for (size_t i = 0; i < n; i++) {
         hits[i] = no_hit();
-        bvh2_walk(b, algo, &rays[i], false, &hits[i], stats);
+        bvh2_walk(b, accuracy, &rays[i], false, &hits[i], stats);
     }
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_trace_bvh2)(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+void LANES_FN(lanes_trace_bvh2)(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                                 size_t n, lanes_hit *hits, lanes_trace_stats *stats)
 {
     if (stats)
-        trace_bvh2_body(b, algo, rays, n, hits, stats);
+        trace_bvh2_body(b, accuracy, rays, n, hits, stats);
     else
-        trace_bvh2_body(b, algo, rays, n, hits, NULL);
+        trace_bvh2_body(b, accuracy, rays, n, hits, NULL);
 }
 
-LANES_BODY void occluded_bvh2_body(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+LANES_BODY void occluded_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                                    size_t n, uint8_t *occluded, lanes_trace_stats *stats)
 {
-    for (size_t i = 0; i < n; i++) occluded[i] = bvh2_walk(b, algo, &rays[i], true, NULL, stats);
+    for (size_t i = 0; i < n; i++) occluded[i] = bvh2_walk(b, accuracy, &rays[i], true, NULL, stats);
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_occluded_bvh2)(const lanes_bvh2 *b, lanes_tri_algo algo, const lanes_ray *rays,
+void LANES_FN(lanes_occluded_bvh2)(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                                    size_t n, uint8_t *occluded, lanes_trace_stats *stats)
 {
     if (stats)
-        occluded_bvh2_body(b, algo, rays, n, occluded, stats);
+        occluded_bvh2_body(b, accuracy, rays, n, occluded, stats);
     else
-        occluded_bvh2_body(b, algo, rays, n, occluded, NULL);
+        occluded_bvh2_body(b, accuracy, rays, n, occluded, NULL);
 }

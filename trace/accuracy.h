@@ -1,0 +1,52 @@
+/* Accuracy modes: what a user trades between speed and exactness.
+ *
+ *   fast     approximate reciprocal directions (hardware estimate plus one
+ *            Newton step), Möller–Trumbore, box exits not widened, secondary
+ *            origins pushed off the surface by the scene epsilon.
+ *   default  exact reciprocals (division), Möller–Trumbore, box exits not
+ *            widened, the scene epsilon. Epsilon policy: a triangle is hit
+ *            iff its determinant is not exactly 0 and tnear <= t <= tfar, with
+ *            no tolerance on the barycentrics (rays through a shared edge may
+ *            miss both triangles: that is what "leaks" count); secondary rays
+ *            start at tnear = 0 from the barycentric hit point moved along the
+ *            geometric normal by lanes_scene_epsilon (1e-5 of the scene
+ *            diagonal plus 1e-6).
+ *   robust   exact reciprocals, the watertight test (Woop, Benthin, Wald
+ *            2013, double-precision fallback when an edge function is 0),
+ *            box exits widened by 1 + 2 gamma(3) (Ize 2013), and secondary
+ *            origins offset from the surface in proportion to the hit point's
+ *            magnitude (Wächter and Binder 2019), so they neither leak nor
+ *            self-intersect however far the scene is from the origin.
+ * In every mode 1/±0 is ±inf and the slab test orders its min and max so
+ * that the NaN of 0 * inf never reaches a result (see box_core.h).
+ *
+ * Baseline header: no intrinsics. */
+#ifndef LANES_TRACE_ACCURACY_H
+#define LANES_TRACE_ACCURACY_H
+
+#include <string.h>
+
+typedef enum lanes_accuracy {
+    LANES_ACCURACY_FAST = 0,
+    LANES_ACCURACY_DEFAULT = 1,
+    LANES_ACCURACY_ROBUST = 2,
+    LANES_ACCURACY_COUNT
+} lanes_accuracy;
+
+/* Inline so that the scene parser (build/), which links no kernels, can
+ * read the names too. */
+static inline const char *lanes_accuracy_name(lanes_accuracy a)
+{
+    static const char *const names[LANES_ACCURACY_COUNT] = {"fast", "default", "robust"};
+    return a >= 0 && a < LANES_ACCURACY_COUNT ? names[a] : "?";
+}
+
+/* -1 for an unknown name. */
+static inline int lanes_accuracy_from_name(const char *name)
+{
+    for (int i = 0; name && i < LANES_ACCURACY_COUNT; i++)
+        if (strcmp(name, lanes_accuracy_name((lanes_accuracy)i)) == 0) return i;
+    return -1;
+}
+
+#endif
