@@ -2,8 +2,8 @@
  * utilisation trends of Wu 2016 chapter 4 measured on the test scenes.
  *
  * 1. Same image: on the default scene, every packet scheme and queue
- *    heuristic at every set this CPU runs renders what the single-ray
- *    renderer renders at that set (pixels may differ only where two
+ *    heuristic at every set this CPU runs and in every accuracy mode renders
+ *    what the single-ray renderer renders at that set and mode (pixels may differ only where two
  *    triangles tie for the closest hit at a shared edge, which the two
  *    traversals may resolve differently: bounded and counted).
  * 2. Packet construction neither loses nor doubles a ray: rays made and
@@ -43,9 +43,68 @@ static lanes_isa isa_of_lanes(int lanes)
     return LANES_ISA_NONE;
 }
 
-static void same_image(const lanes_scene *scene)
+/* Every packet scheme and queue at one set and accuracy mode against the
+ * single-ray renderer at the same set and mode. */
+static void same_image_at(const lanes_scene *scene, const lanes_kernels *k, const lanes_accel *accel,
+                          lanes_accuracy mode)
 {
     char what[256];
+    lanes_error err;
+    lanes_render_options ro;
+    lanes_render_default_options(&ro);
+    ro.isa = k->isa;
+    ro.accuracy = mode;
+    ro.width = ro.height = 96;
+    lanes_render_result single;
+    if (!lanes_render(scene, accel, &ro, &single, &err)) {
+        check(false, err.message);
+        return;
+    }
+    for (int scheme = 0; scheme < LANES_PACKET_SCHEME_COUNT; scheme++)
+        for (int q = 0; q < LANES_QUEUE_COUNT; q++) {
+            lanes_packet_render_options po;
+            lanes_packet_render_default_options(&po);
+            po.base = ro;
+            po.scheme = (lanes_packet_scheme)scheme;
+            po.queue = (lanes_queue_heuristic)q;
+            po.queue_min = 64;
+            static lanes_packet_metrics m;
+            lanes_render_result r;
+            if (!lanes_packet_render(scene, accel, &po, &r, &m, &err)) {
+                check(false, err.message);
+                continue;
+            }
+            size_t px = (size_t)r.width * (size_t)r.height, differ = 0;
+            double worst = 0.0;
+            for (size_t p = 0; p < px; p++) {
+                double d = 0.0;
+                for (int c = 0; c < 3; c++) d = fmax(d, fabs((double)r.rgb[3 * p + c] - single.rgb[3 * p + c]));
+                /* summation order differs: a relative tolerance */
+                if (d > 1e-4 * (1.0 + fabs((double)single.rgb[3 * p]))) differ++;
+                worst = fmax(worst, d);
+            }
+            snprintf(what, sizeof what,
+                     "%s %s %s queue %s: image equals the single-ray image (%zu of %zu pixels differ, "
+                     "at most 0.5%% allowed for edge ties; largest difference %.3g)",
+                     k->name, lanes_accuracy_name(mode), scheme ? "ranged" : "partition",
+                     lanes_queue_name(po.queue), differ, px, worst);
+            check(differ * 200 <= px, what);
+            bool counts = m.shadow_made == m.shadow_traced;
+            for (int d = 0; d <= LANES_MAX_DEPTH; d++) counts = counts && m.specular_made[d] == m.specular_traced[d];
+            snprintf(what, sizeof what,
+                     "%s %s %s queue %s: every ray made is traced once (shadow %llu/%llu, bounce 1 %llu/%llu)",
+                     k->name, lanes_accuracy_name(mode), scheme ? "ranged" : "partition",
+                     lanes_queue_name(po.queue), (unsigned long long)m.shadow_traced,
+                     (unsigned long long)m.shadow_made, (unsigned long long)m.specular_traced[1],
+                     (unsigned long long)m.specular_made[1]);
+            check(counts, what);
+            lanes_render_result_free(&r);
+        }
+    lanes_render_result_free(&single);
+}
+
+static void same_image(const lanes_scene *scene)
+{
     lanes_error err;
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
@@ -60,55 +119,8 @@ static void same_image(const lanes_scene *scene)
             check(false, err.message);
             return;
         }
-        lanes_render_options ro;
-        lanes_render_default_options(&ro);
-        ro.isa = isa;
-        ro.width = ro.height = 96;
-        lanes_render_result single;
-        if (!lanes_render(scene, &accel, &ro, &single, &err)) {
-            check(false, err.message);
-            lanes_accel_free(&accel);
-            return;
-        }
-        for (int scheme = 0; scheme < LANES_PACKET_SCHEME_COUNT; scheme++)
-            for (int q = 0; q < LANES_QUEUE_COUNT; q++) {
-                lanes_packet_render_options po;
-                lanes_packet_render_default_options(&po);
-                po.base = ro;
-                po.scheme = (lanes_packet_scheme)scheme;
-                po.queue = (lanes_queue_heuristic)q;
-                po.queue_min = 64;
-                static lanes_packet_metrics m;
-                lanes_render_result r;
-                if (!lanes_packet_render(scene, &accel, &po, &r, &m, &err)) {
-                    check(false, err.message);
-                    continue;
-                }
-                size_t px = (size_t)r.width * (size_t)r.height, differ = 0;
-                double worst = 0.0;
-                for (size_t p = 0; p < px; p++) {
-                    double d = 0.0;
-                    for (int c = 0; c < 3; c++) d = fmax(d, fabs((double)r.rgb[3 * p + c] - single.rgb[3 * p + c]));
-                    /* summation order differs: a relative tolerance */
-                    if (d > 1e-4 * (1.0 + fabs((double)single.rgb[3 * p]))) differ++;
-                    worst = fmax(worst, d);
-                }
-                snprintf(what, sizeof what,
-                         "%s %s queue %s: image equals the single-ray image (%zu of %zu pixels differ, "
-                         "at most 0.5%% allowed for edge ties; largest difference %.3g)",
-                         k->name, scheme ? "ranged" : "partition", lanes_queue_name(po.queue), differ, px, worst);
-                check(differ * 200 <= px, what);
-                bool counts = m.shadow_made == m.shadow_traced;
-                for (int d = 0; d <= LANES_MAX_DEPTH; d++) counts = counts && m.specular_made[d] == m.specular_traced[d];
-                snprintf(what, sizeof what,
-                         "%s %s queue %s: every ray made is traced once (shadow %llu/%llu, bounce 1 %llu/%llu)",
-                         k->name, scheme ? "ranged" : "partition", lanes_queue_name(po.queue),
-                         (unsigned long long)m.shadow_traced, (unsigned long long)m.shadow_made,
-                         (unsigned long long)m.specular_traced[1], (unsigned long long)m.specular_made[1]);
-                check(counts, what);
-                lanes_render_result_free(&r);
-            }
-        lanes_render_result_free(&single);
+        for (int mode = 0; mode < LANES_ACCURACY_COUNT; mode++)
+            same_image_at(scene, k, &accel, (lanes_accuracy)mode);
         lanes_accel_free(&accel);
     }
 }

@@ -749,6 +749,7 @@ static const bad_case bad_scenes[] = {
     {"scenes/bad/flat_area_light.json", {"line 6", "lights[1]", "no area"}},
     {"scenes/bad/negative_color.json", {"line 3", ">= 0"}},
     {"scenes/bad/unknown_material_type.json", {"line 3", "'metal'"}},
+    {"scenes/bad/unknown_accuracy.json", {"line 3", "'exact'", "fast, default, robust"}},
     {"scenes/bad/ior_on_diffuse.json", {"line 3", "unknown key 'ior'"}},
     {"scenes/bad/unknown_builtin.json", {"line 4", "'teapot'", "valid"}},
     {"scenes/bad/fractional_detail.json", {"line 4", "integer"}},

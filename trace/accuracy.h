@@ -14,9 +14,10 @@
  *   robust   exact reciprocals, the watertight test (Woop, Benthin, Wald
  *            2013, double-precision fallback when an edge function is 0),
  *            box exits widened by 1 + 2 gamma(3) (Ize 2013), and secondary
- *            origins offset from the surface in proportion to the hit point's
- *            magnitude (Wächter and Binder 2019), so they neither leak nor
- *            self-intersect however far the scene is from the origin.
+ *            origins moved out of the error bound of the hit point (pbrt-v4's
+ *            offset; see lanes_offset_origin in shading.h), which grows with
+ *            the coordinates, so rays neither leak nor self-intersect however
+ *            far the scene is from the origin.
  * In every mode 1/±0 is ±inf and the slab test orders its min and max so
  * that the NaN of 0 * inf never reaches a result (see box_core.h).
  *

@@ -57,9 +57,12 @@ static inline vec3 lanes_background(vec3 d)
     return v3_add(v3_scale(v3(0.05f, 0.05f, 0.06f), 1.0f - t), v3_scale(v3(0.15f, 0.18f, 0.25f), t));
 }
 
+static inline vec3 v3_abs(vec3 a) { return v3(fabsf(a.x), fabsf(a.y), fabsf(a.z)); }
+
 /* The surface a ray hit. */
 typedef struct {
     vec3 p;        /* hit point, from the barycentrics (more accurate than o + t d) */
+    vec3 perr;     /* bound on each coordinate's rounding error in p */
     vec3 nf;       /* geometric normal facing the incoming ray */
     bool front;    /* the ray came from the side the normal points to */
     const lanes_material *m;
@@ -71,45 +74,50 @@ static inline lanes_surface lanes_surface_at(const lanes_scene *s, const lanes_h
     const float *v = s->verts + (size_t)h->prim * 9;
     vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
     vec3 n = v3_normalize(v3_cross(e1, e2));
-    sf.p = v3_add(v0, v3_add(v3_scale(e1, h->u), v3_scale(e2, h->v)));
+    vec3 ue1 = v3_scale(e1, h->u), ve2 = v3_scale(e2, h->v);
+    sf.p = v3_add(v0, v3_add(ue1, ve2));
+    /* Whatever error u and v carry, any v0 + u e1 + v e2 lies in the
+     * triangle's plane: p leaves the plane only by the rounding of this
+     * sum. The edges (one rounding), the products and the inner sum (two)
+     * make at most gamma(3) of |u e1| + |v e2|; the final sum one unit
+     * roundoff of |p|. */
+    const float u = 0x1p-24f, gamma3 = 3.0f * u / (1.0f - 3.0f * u);
+    sf.perr = v3_add(v3_scale(v3_abs(sf.p), u), v3_scale(v3_add(v3_abs(ue1), v3_abs(ve2)), gamma3));
     sf.front = v3_dot(n, d) < 0.0f;
     sf.nf = sf.front ? n : v3_scale(n, -1.0f);
     sf.m = &s->materials[s->material_of[h->prim]];
     return sf;
 }
 
-/* The origin of a ray leaving a surface at p, on the side the geometric
- * normal n (unit length) points to.
+/* The origin of a ray leaving the surface sf on the side the unit normal n
+ * points to (sf->nf or its opposite).
  *
  * Fast and default modes move p along n by the scene epsilon: right while
- * the scene's coordinates are small against its size, wrong (self-hits) once
- * the rounding of p, a few ulps of |p|, exceeds the epsilon.
+ * the scene's coordinates are small against its size, wrong (self-hits,
+ * shadow acne) once the rounding of p, about an ulp of |p|, exceeds it.
  *
- * Robust mode follows Wächter and Binder (Ray Tracing Gems, ch. 6, 2019):
- * the rounding error of p grows with |p|, so each coordinate moves by a
- * fixed number of ulps (256 * n, in the integer representation) rather than
- * by a distance; near the origin, where ulps vanish, by 2^-16 * n instead.
- * p must come from the barycentrics (lanes_surface_at), so that its error
- * is that of one interpolation, not of o + t d. */
-static inline float lanes_offset_coordinate(float p, float n)
+ * Robust mode moves p out of the box of its rounding error (pbrt-v4's
+ * error-bound offset, Pharr, Jakob, Humphreys 2023, 6.8.6): along n by
+ * twice the box's extent in that direction, the factor 2 covering the
+ * rounding of n itself and of the triangle test that decides whether the
+ * new ray starts in front of the plane; then every coordinate one float
+ * further out, so that rounding the sum cannot bring it back. The offset
+ * grows with |p|, so it holds at any distance from the origin, and stays a
+ * few ulps where Wächter and Binder's fixed 256 ulps (Ray Tracing Gems, ch.
+ * 6) moved shadow origins 2 units off a sphere 1e5 from the origin. */
+static inline float lanes_away(float x, float direction)
 {
-    const float near_origin = 1.0f / 32.0f;
-    if (fabsf(p) < near_origin) return p + 0x1p-16f * n;
-    int32_t bits, steps = (int32_t)(256.0f * n);
-    memcpy(&bits, &p, sizeof bits);
-    /* ulps count away from zero on the negative side too */
-    bits += p < 0.0f ? -steps : steps;
-    float moved;
-    memcpy(&moved, &bits, sizeof moved);
-    return isfinite(moved) ? moved : p;
+    return direction > 0.0f ? nextafterf(x, INFINITY) : direction < 0.0f ? nextafterf(x, -INFINITY) : x;
 }
 
-static inline vec3 lanes_offset_origin(vec3 p, vec3 n, lanes_accuracy mode, float eps)
+static inline vec3 lanes_offset_origin(const lanes_surface *sf, vec3 n, lanes_accuracy mode, float eps)
 {
-    if (mode != LANES_ACCURACY_ROBUST) return v3_add(p, v3_scale(n, eps));
-    return v3(lanes_offset_coordinate(p.x, n.x), lanes_offset_coordinate(p.y, n.y),
-              lanes_offset_coordinate(p.z, n.z));
+    if (mode != LANES_ACCURACY_ROBUST) return v3_add(sf->p, v3_scale(n, eps));
+    float d = 2.0f * v3_dot(v3_abs(n), sf->perr);
+    vec3 o = v3_add(sf->p, v3_scale(n, d));
+    return v3(lanes_away(o.x, n.x), lanes_away(o.y, n.y), lanes_away(o.z, n.z));
 }
+
 
 /* The material alone, for renders whose shading reads no hit geometry
  * (lanes_scene_plan.hit_geometry false): no barycentrics, no normal. */
@@ -138,7 +146,7 @@ static inline int lanes_diffuse_light(const lanes_scene *s, const lanes_surface 
                                       lanes_shadow_ray *out, vec3 *ambient)
 {
     vec3 albedo = v3_mul(weight, v3_load(sf->m->color));
-    vec3 origin = lanes_offset_origin(sf->p, sf->nf, mode, eps);
+    vec3 origin = lanes_offset_origin(sf, sf->nf, mode, eps);
     int n = 0;
     *ambient = v3_scale(albedo, 0.03f); /* a little ambient, so unlit parts are not black */
     for (size_t i = 0; i < s->point_light_count; i++) {
@@ -192,7 +200,7 @@ static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weig
                                       lanes_accuracy mode, float eps, lanes_bounce_ray out[2])
 {
     vec3 color = v3_mul(weight, v3_load(sf->m->color));
-    vec3 above = lanes_offset_origin(sf->p, sf->nf, mode, eps);
+    vec3 above = lanes_offset_origin(sf, sf->nf, mode, eps);
     if (sf->m->kind == LANES_MAT_MIRROR) {
         out[0] = (lanes_bounce_ray){above, lanes_reflect(d, sf->nf), color, seed * 31u + 7u};
         return 1;
@@ -213,7 +221,7 @@ static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weig
     float fresnel = r0 + (1.0f - r0) * powf(1.0f - cosi, 5.0f);
     vec3 refr_dir = v3_add(v3_scale(dn, eta), v3_scale(sf->nf, eta * cosi - sqrtf(k)));
     out[0] = (lanes_bounce_ray){above, refl_dir, v3_scale(color, fresnel), seed * 31u + 11u};
-    out[1] = (lanes_bounce_ray){lanes_offset_origin(sf->p, v3_scale(sf->nf, -1.0f), mode, eps), refr_dir,
+    out[1] = (lanes_bounce_ray){lanes_offset_origin(sf, v3_scale(sf->nf, -1.0f), mode, eps), refr_dir,
                                 v3_scale(color, 1.0f - fresnel), seed * 31u + 13u};
     return 2;
 }
