@@ -238,9 +238,13 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
             const lanes_shadow_ray *sr = &w->shadow_tmp[i];
             /* Shadow rays toward a point light start at the light, so a
              * packet's rays share their origin (Wu 3.4.2). The segment is
-             * the same; the far end stops at the offset surface point. */
+             * the same; the far end stops at the offset surface point.
+             * Not in robust mode: there the offset is a few ulps of the
+             * hit point, below the rounding of a t measured from the
+             * light, and the reversed ray would hit the surface it is
+             * meant to end above. */
             pending_shadow ps;
-            if (sr->light < s->point_light_count) {
+            if (sr->light < s->point_light_count && job->opt->base.accuracy != LANES_ACCURACY_ROBUST) {
                 float dist = sr->tfar / (1.0f - 1e-4f);
                 ps = (pending_shadow){v3_load(s->point_lights[sr->light].position), v3_scale(sr->d, -1.0f),
                                       dist * 1e-4f, dist, sr->add, r->pixel, sr->light};
