@@ -161,7 +161,8 @@ typedef struct {
     lanes_scheme scheme;
     const lanes_bvh2 *bvh2;
     const lanes_wbvh *wide;
-    const lanes_ray *rays;
+    lanes_accuracy accuracy;
+    const lanes_ray *rays; /* prepared with the accuracy mode's reciprocals */
     lanes_hit *hits;
     uint8_t *occluded;
     bool occlusion;
@@ -183,7 +184,7 @@ static void packet_work(const lanes_job *j, size_t b, size_t e)
         lanes_rays view = lanes_rays_view(&j->soa, p, n);
         lanes_frustum f;
         j->k->frustum_build(&view, NULL, n, &f);
-        lanes_packet_options po = {LANES_PACKET_PARTITION, LANES_ACCURACY_DEFAULT, &f, true, false, j->occlusion};
+        lanes_packet_options po = {LANES_PACKET_PARTITION, j->accuracy, &f, true, false, j->occlusion};
         j->k->trace_packet(j->bvh2, &po, &view, j->prim + p, j->u + p, j->v + p,
                            j->occluded ? j->occluded + p : NULL, NULL);
     }
@@ -206,7 +207,7 @@ static bool packet_setup(lanes_job *j, size_t n)
         j->soa.tnear[i] = r->tnear, j->soa.tfar[i] = r->tfar;
     }
     j->soa.count = n;
-    j->k->rays_prepare(&j->soa, LANES_RCP_EXACT);
+    j->k->rays_prepare(&j->soa, lanes_accuracy_precision(j->accuracy).rcp);
     memcpy(j->tnear0, j->soa.tnear, n * sizeof(float));
     memcpy(j->tfar0, j->soa.tfar, n * sizeof(float));
     return true;
@@ -244,17 +245,17 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     }
     if (j->occlusion) {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->occluded_wide(j->wide, j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b,
+            j->k->occluded_wide(j->wide, j->bvh2, j->accuracy, j->rays + b, e - b,
                                 j->occluded + b, NULL);
         else
-            j->k->occluded_bvh2(j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->occluded + b,
+            j->k->occluded_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->occluded + b,
                                 NULL);
     } else {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->trace_wide(j->wide, j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->hits + b,
+            j->k->trace_wide(j->wide, j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b,
                              NULL);
         else
-            j->k->trace_bvh2(j->bvh2, LANES_ACCURACY_DEFAULT, j->rays + b, e - b, j->hits + b, NULL);
+            j->k->trace_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
     }
 }
 
@@ -564,6 +565,7 @@ typedef struct {
     lanes_embree_isa embree_isa;
     bool isa_given;
     lanes_isa isa;
+    lanes_accuracy accuracy; /* of every lanes configuration */
 } options;
 
 typedef struct {
@@ -633,7 +635,13 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
                          sizeof *cfg);
     lanes_embree_batch batches[LANES_EMBREE_METHOD_COUNT];
     bool have_batch[LANES_EMBREE_METHOD_COUNT] = {false};
-    if (!cfg) cli_fail("compare: out of memory");
+    /* lanes' copy of the rays, with the reciprocals of its accuracy mode */
+    lanes_ray *mode_rays = malloc(nn * sizeof *mode_rays);
+    if (!cfg || !mode_rays) cli_fail("compare: out of memory");
+    for (size_t i = 0; i < n; i++) {
+        mode_rays[i] = rays[i];
+        lanes_ray_prepare_rcp(&mode_rays[i], lanes_accuracy_precision(c->opt.accuracy).rcp);
+    }
     int ncfg = 0;
     c->ray_count[kind] = n;
 
@@ -642,8 +650,8 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
         for (int sc = 0; sc < LANES_SCHEME_COUNT; sc++) {
             config *cf = &cfg[ncfg++];
             cf->lj = (lanes_job){.k = k, .scheme = (lanes_scheme)sc, .bvh2 = &c->bvh2,
-                                 .wide = &c->wide[width_slot(k->wide_width)], .rays = rays,
-                                 .occlusion = occl};
+                                 .wide = &c->wide[width_slot(k->wide_width)], .rays = mode_rays,
+                                 .accuracy = c->opt.accuracy, .occlusion = occl};
             if (occl)
                 cf->lj.occluded = malloc(nn);
             else
@@ -656,8 +664,8 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
          * tiles, so a packet is a strip of 16 tiles), partition traversal
          * of the BVH2 with the packet frustum built inside the clock */
         config *cf = &cfg[ncfg++];
-        cf->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_SINGLE, .bvh2 = &c->bvh2, .rays = rays,
-                             .occlusion = occl};
+        cf->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_SINGLE, .bvh2 = &c->bvh2, .rays = mode_rays,
+                             .accuracy = c->opt.accuracy, .occlusion = occl};
         cf->lj.packet = true;
         cf->lj.hits = occl ? NULL : malloc(nn * sizeof *cf->lj.hits);
         cf->lj.occluded = occl ? malloc(nn + LANES_MAX_W) : NULL;
@@ -739,7 +747,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             } else {
                 /* the blockers behind the two answers, one ray each */
                 lanes_hit lh, eh;
-                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, LANES_ACCURACY_DEFAULT, &rays[r], 1,
+                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, cfg[i].lj.accuracy, &cfg[i].lj.rays[r], 1,
                                         &lh, NULL);
                 lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
                 classify(&c->scene, &rays[r], &lh, &eh, a);
@@ -756,6 +764,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++)
         if (have_batch[m]) lanes_embree_batch_free(&batches[m]);
     free(cfg);
+    free(mode_rays);
 }
 
 static void print_table(FILE *out, const compare *c)
@@ -796,6 +805,7 @@ static void print_json(const compare *c, double embree_build)
     cli_json_string(stdout, RTC_VERSION_STRING);
     printf(",\n  \"embree_isa\": ");
     cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
+    printf(",\n  \"accuracy\": \"%s\"", lanes_accuracy_name(c->opt.accuracy));
     printf(",\n  \"image\": [%d, %d],\n  \"reps\": %d,\n", c->width, c->height, c->opt.reps);
     printf("  \"ray_counts\": {");
     for (int k = 0; k < KIND_COUNT; k++)
@@ -829,10 +839,11 @@ static void print_json(const compare *c, double embree_build)
 
 static const char usage[] =
     "usage: lanes compare [SCENE] [--isa NAME] [--embree-isa NAME] [--threads N]\n"
-    "                     [--rays N] [--reps N] [--csv FILE] [--json] [--quick]\n"
+    "                     [--rays N] [--reps N] [--accuracy M] [--csv FILE] [--json]\n"
+    "                     [--quick]\n"
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
-    "\"wide\" = the set's wide BVH; Moller triangles) and through Embree (each of\n"
+    "\"wide\" = the set's wide BVH) and through Embree (each of\n"
     "rtcIntersect1/4/8/16/1M, default and coherent contexts; rtcOccluded* for\n"
     "shadow rays), on one pinned thread and on N, and prints Mrays/s with the\n"
     "ratio to the best Embree API for the same rays and threads.\n"
@@ -847,6 +858,8 @@ static const char usage[] =
     "  --rays N           about N camera rays, in the camera's aspect (default 262144,\n"
     "                     512x512); shadow and diffuse rays start at their hits\n"
     "  --reps N           timed repetitions, median reported (default 5)\n"
+    "  --accuracy M       lanes' accuracy mode: fast, default (Moller, exact 1/d) or\n"
+    "                     robust (watertight, widened boxes); see lanes render --explain\n"
     "  --csv FILE         also write the table rows to FILE\n"
     "  --json             one JSON object on stdout instead of the table\n"
     "  --quick            16384 camera rays, 2 repetitions (a smoke test)\n"
@@ -880,6 +893,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     o->threads = ncpus;
     o->rays = -1;
     o->reps = -1;
+    o->accuracy = LANES_ACCURACY_DEFAULT;
     o->embree_isa = lanes_embree_isa_best();
     o->isa_given = ctx->forced_isa != LANES_ISA_NONE;
     o->isa = ctx->forced_isa;
@@ -898,6 +912,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             o->threads = (int)cli_parse_count(&a, "--threads", v, 1, MAX_THREADS);
         } else if (cli_value(&a, "--rays", &v)) {
             o->rays = (long)cli_parse_count(&a, "--rays", v, 1, 4096L * 4096L);
+        } else if (cli_value(&a, "--accuracy", &v)) {
+            int m = lanes_accuracy_from_name(v);
+            if (m < 0) cli_usage_error(ctx, self, "--accuracy: unknown mode '%s' (fast, default, robust)", v);
+            o->accuracy = (lanes_accuracy)m;
         } else if (cli_value(&a, "--reps", &v)) {
             o->reps = (int)cli_parse_count(&a, "--reps", v, 1, 64);
         } else if (cli_value(&a, "--embree-isa", &v)) {
@@ -961,6 +979,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             printf("%s%s (%d lane%s, %d-wide BVH)", i ? ", " : "", lanes_isa_name(c->isas[i]),
                    lanes_isa_lanes(c->isas[i]), lanes_isa_lanes(c->isas[i]) == 1 ? "" : "s",
                    lanes_kernels_for(c->isas[i])->wide_width);
+        printf(", accuracy %s", lanes_accuracy_name(o->accuracy));
         printf("\nembree:   %s, ISA %s\n", RTC_VERSION_STRING, lanes_embree_isa_name(o->embree_isa));
         printf("scene:    %s (%zu triangles)\n", c->scene.name[0] ? c->scene.name : o->scene_spec,
                c->scene.triangle_count);
