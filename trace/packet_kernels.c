@@ -37,6 +37,7 @@ typedef struct {
     uint32_t groups[MAX_GROUPS];
     uint16_t masks[MAX_DEPTH][MAX_GROUPS];
     uint32_t live_rays[LANES_PACKET_MAX_RAYS];
+    uint16_t found[MAX_GROUPS]; /* closest hit: the rays of each group that have one */
 } packet_scratch;
 
 /* Is the box entirely outside the packet's frustum? The frustum cores are
@@ -155,8 +156,12 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
                 }
             } else {
                 /* tfar is the closest hit so far: the test accepted t <= tfar,
-                 * so ties go to the later triangle; take strictly nearer only. */
-                vmask nearer = vm_and(h.hit, vf_lt(h.t, vf_load(rays->tfar + at)));
+                 * so ties go to the later triangle; take strictly nearer only.
+                 * A ray's first hit may lie at its own tfar: [tnear, tfar]
+                 * is closed. */
+                vmask first = vm_not(vm_from_bits(s->found[g]));
+                vmask nearer = vm_and(h.hit, vm_or(first, vf_lt(h.t, vf_load(rays->tfar + at))));
+                s->found[g] |= (uint16_t)vm_bits(nearer);
                 vf_store_masked(rays->tfar + at, nearer, h.t);
                 vf_store_masked(u + at, nearer, h.u);
                 vf_store_masked(v + at, nearer, h.v);
@@ -188,6 +193,7 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
         lanes_vray r = lanes_load_rays(rays, NULL, (size_t)g * LANES_W, n, false, false);
         uint32_t m = vm_bits(vm_and(r.live, vf_le(r.tnear, r.tfar)));
         s.masks[0][g] = (uint16_t)m;
+        s.found[g] = 0;
         if (m || ranged) s.groups[ia++] = g;
     }
     if (ia == 0) return;

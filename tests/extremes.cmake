@@ -1,0 +1,19 @@
+# Numerical extremes (label "kernels"): every kernel and traversal of every
+# set this CPU runs, in every accuracy mode, against hand-derived
+# expectations (signed zeros, denormals, 1e20 and 1e-20, NaN and Inf in
+# rays, closed intervals, degenerate triangles, flat and empty boxes,
+# inactive lanes). Included from tests/CMakeLists.txt.
+#
+#   ctest --test-dir out -R extremes --output-on-failure
+if(TARGET lanes_bvh AND TARGET lanes_scene)
+  add_executable(test_extremes ${CMAKE_CURRENT_LIST_DIR}/test_extremes.c)
+  target_link_libraries(test_extremes PRIVATE lanes_bvh lanes_scene lanes)
+  add_test(NAME extremes COMMAND test_extremes)
+  # The test enumerates the sets itself: a LANES_* variable of whoever runs
+  # ctest must not narrow them.
+  set_tests_properties(extremes PROPERTIES
+    LABELS kernels TIMEOUT 120
+    ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+else()
+  message(STATUS "lanes: no BVH or scene library; the extremes test is not added")
+endif()
