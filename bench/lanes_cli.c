@@ -42,6 +42,7 @@ static const cli_command *const commands[] = {
     &cli_cmd_compare,
 #endif
     &cli_cmd_study,
+    &cli_cmd_accuracy,
     &cli_cmd_bench,
     &cli_cmd_help,
     NULL,
