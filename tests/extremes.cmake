@@ -17,3 +17,9 @@ if(TARGET lanes_bvh AND TARGET lanes_scene)
 else()
   message(STATUS "lanes: no BVH or scene library; the extremes test is not added")
 endif()
+
+# The compiler must round floats where the source says so (see the test).
+add_executable(test_float_narrowing ${CMAKE_CURRENT_LIST_DIR}/test_float_narrowing.c)
+target_link_libraries(test_float_narrowing PRIVATE lanes_build_flags)
+add_test(NAME float_narrowing COMMAND test_float_narrowing)
+set_tests_properties(float_narrowing PROPERTIES LABELS kernels TIMEOUT 30)

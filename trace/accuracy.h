@@ -18,6 +18,17 @@
  *            offset; see lanes_offset_origin in shading.h), which grows with
  *            the coordinates, so rays neither leak nor self-intersect however
  *            far the scene is from the origin.
+ * What each mode costs and gains is measured by `lanes accuracy`. Two
+ * findings from it shape these promises:
+ * - Möller–Trumbore on the FMA sets (avx2, avx512emu, avx512) leaks about
+ *   twice as many rays aimed at edges and vertices as on the others: a fused
+ *   a*b - c*d is not antisymmetric, so the two triangles of a shared edge
+ *   disagree more often about which side a ray passes.
+ * - Robust mode is watertight for meshes whose shared edges are shared
+ *   exactly. Rounding a mesh's vertices far from the origin (1e7 units for
+ *   a 100-unit dragon) collapses thin triangles to zero area and leaves
+ *   T-junctions, cracks no watertight test closes: a few rays in 1e5 aimed
+ *   at such vertices leak there. Up to 1e5 units it leaks none.
  * In every mode 1/±0 is ±inf and the slab test orders its min and max so
  * that the NaN of 0 * inf never reaches a result (see box_core.h).
  *
