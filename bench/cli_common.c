@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 static void list_commands(FILE *out, const char *prefix, const cli_command *group)
 {
@@ -303,4 +304,16 @@ double cli_median(double *v, size_t n)
     if (n == 0) return 0.0;
     qsort(v, n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void cli_progress_step(cli_progress *p, const char *what)
+{
+    p->done++;
+    if (isatty(2)) {
+        fprintf(stderr, "\r[%3d/%3d] %-70.70s", p->done, p->total, what);
+        if (p->done == p->total) fprintf(stderr, "\n");
+    } else {
+        fprintf(stderr, "[%d/%d] %s\n", p->done, p->total, what);
+    }
+    fflush(stderr);
 }

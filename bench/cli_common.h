@@ -112,4 +112,11 @@ uint64_t cli_thread_cpu_ns(void);
 /* Median of n doubles (sorts them in place); 0 for n == 0. */
 double cli_median(double *v, size_t n);
 
+/* Progress of a long command on stderr: one line per step, redrawn in place
+ * on a terminal, appended otherwise (CI logs). */
+typedef struct cli_progress {
+    int done, total;
+} cli_progress;
+void cli_progress_step(cli_progress *p, const char *what);
+
 #endif

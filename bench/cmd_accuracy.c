@@ -78,19 +78,9 @@ static double row_self(const acc_row *r) { return per_1e7(r->c.self_hits, r->c.s
 
 /* ---- progress -------------------------------------------------------- */
 
-static int progress_done, progress_total;
+static cli_progress progress_bar;
 
-static void progress(const char *what)
-{
-    progress_done++;
-    if (isatty(2)) {
-        fprintf(stderr, "\r[%3d/%3d] %-70.70s", progress_done, progress_total, what);
-        if (progress_done == progress_total) fprintf(stderr, "\n");
-    } else {
-        fprintf(stderr, "[%d/%d] %s\n", progress_done, progress_total, what);
-    }
-    fflush(stderr);
-}
+static void progress(const char *what) { cli_progress_step(&progress_bar, what); }
 
 /* ---- output ---------------------------------------------------------- */
 
@@ -610,7 +600,7 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
     fprintf(report, "\n");
     fflush(report);
 
-    progress_total = plan.nmeshes * plan.ntranslations * nisa * nmodes;
+    progress_bar.total = plan.nmeshes * plan.ntranslations * nisa * nmodes;
     row_list rows = {0};
     double t_start = lanes_render_clock();
     for (int m = 0; m < plan.nmeshes; m++) {

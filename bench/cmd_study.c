@@ -72,19 +72,9 @@ typedef struct {
     bool quiet;
 } study_plan;
 
-static int progress_done, progress_total;
+static cli_progress progress_bar;
 
-static void progress(const char *what)
-{
-    progress_done++;
-    if (isatty(2)) {
-        fprintf(stderr, "\r[%3d/%3d] %-70.70s", progress_done, progress_total, what);
-        if (progress_done == progress_total) fprintf(stderr, "\n");
-    } else {
-        fprintf(stderr, "[%d/%d] %s\n", progress_done, progress_total, what);
-    }
-    fflush(stderr);
-}
+static void progress(const char *what) { cli_progress_step(&progress_bar, what); }
 
 /* Median render time of plan->reps runs with counters off. */
 static double timed(const lanes_scene *scene, const lanes_accel *accel, bool packets,
@@ -724,9 +714,9 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
     int nisa = 0;
     for (int i = 0; i < LANES_ISA_COUNT; i++) nisa += plan.isas[i];
     /* per scene: single scalar + wide per ISA + ranged per ISA + packet none + packet MAX/CORNER per size */
-    progress_total = nspecs * (1 + nisa + nisa + nisa * (2 + 2 * plan.queue_size_count));
+    progress_bar.total = nspecs * (1 + nisa + nisa + nisa * (2 + 2 * plan.queue_size_count));
 #ifdef LANES_HAVE_COMPARE
-    progress_total += nspecs;
+    progress_bar.total += nspecs;
 #endif
 
     char hist_path[1024];
