@@ -7,6 +7,7 @@
 
 #include "build/mesh_import.h"
 
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
@@ -16,6 +17,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -27,6 +29,7 @@
  * header, not a mesh, and we refuse before anything is allocated. */
 #define MAX_VERTICES ((unsigned long long)UINT32_MAX)
 #define MAX_POLYGON 65536    /* vertices of one face */
+#define MAX_OFF_POLYGON 9    /* what Assimp 5.2's OFF reader keeps */
 #define MAX_LINE (64u << 20) /* bytes of one text line */
 #define MAX_NODE_DEPTH 256   /* Assimp node hierarchy */
 
@@ -144,6 +147,26 @@ static int get_line(stream *s)
     if (s->ln_len > 0 && s->ln[s->ln_len - 1] == '\r')
         s->ln_len--;
     s->ln[s->ln_len] = '\0';
+    /* Assimp's text readers end a line at NUL, CR and FF and take VT for
+     * part of a token; this validator would read past a NUL, and treats
+     * VT and FF as blanks. Where the two disagree about the tokens, the
+     * file that passed here is not the file Assimp reads: a VT before an
+     * OFF face made Assimp 5.2 crash, a NUL inside a PLY number made it
+     * leak (both found by the fuzzers). No mesh needs these bytes. */
+    for (size_t i = 0; i < s->ln_len; i++) {
+        unsigned char c = (unsigned char)s->ln[i];
+        if (c == '\0' || c == '\r' || c == '\v' || c == '\f') {
+            if (c == '\r')
+                fail_line(s, "carriage return at column %zu (old Mac line endings are not "
+                             "supported)",
+                          i + 1);
+            else
+                fail_line(s, "control character 0x%02x at column %zu (binary data in a text "
+                             "file?)",
+                          c, i + 1);
+            return -1;
+        }
+    }
     return 1;
 }
 
@@ -267,6 +290,55 @@ static int parse_int(tok t, long long *out)
     return NUM_OK;
 }
 
+/* Unsigned decimal integers, digits only: Assimp reads OFF's integers and
+ * PLY's unsigned ones with strtoul10, which stops at a sign, so "+1" is 0
+ * to it and the rest of the line shifts (a "+1" face count made Assimp 5.2
+ * crash, found by fuzz_mesh_off). */
+static int parse_uint(tok t, long long *out)
+{
+    if (t.n == 0 || t.p[0] == '+' || t.p[0] == '-')
+        return NUM_BAD;
+    return parse_int(t, out);
+}
+
+/* A real in the shape Assimp's fast_atoreal_move reads whole, for the
+ * formats it parses as one stream (OFF, PLY, STL) rather than word by word
+ * (OBJ): a point must be followed by a digit ("4." leaves the point for
+ * the next number, which then fails: Assimp 5.2 throws and leaks the PLY
+ * mesh, found by fuzz_mesh_ply), and at most 18 digits before the point
+ * or in the exponent (more overflow its 64-bit reader, which then stops
+ * without moving on). */
+static int parse_real_stream(tok t, double *out)
+{
+    size_t i = 0, n = t.n, digits = 0;
+    if (i < n && (t.p[i] == '+' || t.p[i] == '-'))
+        i++;
+    if (i < n && !(t.p[i] >= '0' && t.p[i] <= '9') && t.p[i] != '.')
+        return parse_real(t, out); /* nan, inf or a bad token */
+    while (i < n && t.p[i] >= '0' && t.p[i] <= '9')
+        i++, digits++;
+    if (digits > 18)
+        return NUM_BAD;
+    if (i < n && t.p[i] == '.') {
+        if (i + 1 >= n || !(t.p[i + 1] >= '0' && t.p[i + 1] <= '9'))
+            return NUM_BAD;
+        for (i++; i < n && t.p[i] >= '0' && t.p[i] <= '9'; i++)
+            digits++;
+    }
+    if (digits == 0)
+        return NUM_BAD;
+    if (i < n && (t.p[i] == 'e' || t.p[i] == 'E')) {
+        size_t e = 0;
+        if (++i < n && (t.p[i] == '+' || t.p[i] == '-'))
+            i++;
+        while (i < n && t.p[i] >= '0' && t.p[i] <= '9')
+            i++, e++;
+        if (e == 0 || e > 18)
+            return NUM_BAD;
+    }
+    return i == n ? parse_real(t, out) : NUM_BAD;
+}
+
 /* Reads three coordinates of a vertex from *cur. */
 static bool read_xyz(stream *s, const char **cur, const char *what)
 {
@@ -276,7 +348,7 @@ static bool read_xyz(stream *s, const char **cur, const char *what)
         double v;
         if (!next_tok(cur, &t))
             return fail_line(s, "%s has fewer than 3 coordinates", what);
-        int r = parse_real(t, &v);
+        int r = parse_real_stream(t, &v);
         if (r == NUM_BAD)
             return fail_line(s, "bad number '%s' in a vertex", tok_str(t, b));
         if (r == NUM_NONFINITE)
@@ -287,10 +359,86 @@ static bool read_xyz(stream *s, const char **cur, const char *what)
 
 /* ---- OBJ ---- */
 
+/* The numbers after a v, vt or vn keyword: finite decimal reals, as many
+ * as Assimp 5.2 reads. It drops a vertex of 5 numbers (or 7, or 2)
+ * without a word, so the faces after it point at the wrong vertices, and
+ * throws on a texture coordinate of 1 or 4 numbers, leaking the mesh
+ * (found by fuzz_mesh_obj). A w of 0 it divides by. */
+typedef enum { OBJ_V, OBJ_VT, OBJ_VN } obj_kind;
+
+static bool obj_numbers(stream *s, const char **cur, obj_kind kind)
+{
+    static const char *const what[] = {"vertex", "texture coordinate", "normal"};
+    static const char *const counts[] = {"3, 4 or 6", "2 or 3", "3"};
+    double x[7];
+    unsigned n = 0;
+    tok t;
+    char b[48];
+    while (next_tok(cur, &t)) {
+        if (n == 7)
+            return fail_line(s, "%s with more than 6 numbers", what[kind]);
+        int r = parse_real(t, &x[n]);
+        if (r == NUM_BAD)
+            return fail_line(s, "bad number '%s' in a %s", tok_str(t, b), what[kind]);
+        if (r == NUM_NONFINITE)
+            return fail_line(s, "%s component '%s' is not a finite float", what[kind],
+                             tok_str(t, b));
+        n++;
+    }
+    bool ok = kind == OBJ_V ? n == 3 || n == 4 || n == 6 : kind == OBJ_VT ? n == 2 || n == 3 : n == 3;
+    if (kind == OBJ_V && n < 3)
+        return fail_line(s, "vertex has fewer than 3 coordinates");
+    if (!ok)
+        return fail_line(s, "%s with %u numbers (Assimp reads %s)", what[kind], n, counts[kind]);
+    if (kind == OBJ_V && n == 4 && x[3] == 0.0)
+        return fail_line(s, "vertex with w = 0");
+    return true;
+}
+
+/* The indices of a face, line or point into one kind of element: nonzero;
+ * negative ones count back from the last element defined so far, positive
+ * ones may name elements defined further down, so their range is checked
+ * at the end. */
+typedef struct obj_ref {
+    unsigned long long count, max; /* elements defined so far; largest index */
+    unsigned long max_line;
+    const char *what;
+} obj_ref;
+
+static bool obj_index(stream *s, tok field, tok whole, obj_ref *ref)
+{
+    long long i;
+    char b[48];
+    if (parse_int(field, &i) != NUM_OK)
+        return fail_line(s, "bad %s index in '%s'", ref->what, tok_str(whole, b));
+    if (i == 0)
+        return fail_line(s, "%s index 0 in '%s' (OBJ indices start at 1)", ref->what,
+                         tok_str(whole, b));
+    if (i < 0 && (unsigned long long)(-i) > ref->count)
+        return fail_line(s,
+                         "relative %s index -%llu reaches before the first one (%llu defined "
+                         "so far)",
+                         ref->what, (unsigned long long)(-i), ref->count);
+    if (i > 0 && (unsigned long long)i > ref->max) {
+        ref->max = (unsigned long long)i;
+        ref->max_line = s->line;
+    }
+    return true;
+}
+
+static bool obj_range(stream *s, const obj_ref *ref)
+{
+    if (ref->max <= ref->count)
+        return true;
+    s->line = ref->max_line;
+    return fail_line(s, "%s index %llu out of range (the file has %llu)", ref->what, ref->max,
+                     ref->count);
+}
+
 static bool check_obj(stream *s)
 {
-    unsigned long long nv = 0, max_index = 0;
-    unsigned long max_line = 0;
+    obj_ref v = {0, 0, 0, "vertex"}, vt = {0, 0, 0, "texture coordinate"},
+            vn = {0, 0, 0, "normal"};
     int r;
     while ((r = get_line(s)) > 0) {
         char *hash = strchr(s->ln, '#');
@@ -298,40 +446,59 @@ static bool check_obj(stream *s)
             *hash = '\0';
         const char *cur = s->ln;
         tok kw;
+        char b[48];
         if (!next_tok(&cur, &kw))
             continue;
+        bool geometry = strchr("vflp", kw.p[0]) != NULL;
+        /* Assimp skips a line that starts with a blank: an indented vertex
+         * or face would be lost, or shift every index after it. */
+        if (geometry && kw.p != s->ln)
+            return fail_line(s, "indented '%s' statement (Assimp ignores lines that start with "
+                                "a blank)",
+                             tok_str(kw, b));
         if (tok_is(kw, "v")) {
-            if (!read_xyz(s, &cur, "vertex"))
+            if (!obj_numbers(s, &cur, OBJ_V))
                 return false;
-            if (++nv > MAX_VERTICES)
+            if (++v.count > MAX_VERTICES)
                 return fail_line(s, "more than %llu vertices", MAX_VERTICES);
+        } else if (kw.p[0] == 'v' && kw.n >= 2 && (kw.p[1] == 't' || kw.p[1] == 'n')) {
+            /* Assimp takes every "vt..." for a texture coordinate and every
+             * "vn..." for a normal. */
+            bool tex = kw.p[1] == 't';
+            if (kw.n != 2)
+                return fail_line(s, "unsupported OBJ statement '%s'", tok_str(kw, b));
+            if (!obj_numbers(s, &cur, tex ? OBJ_VT : OBJ_VN))
+                return false;
+            (tex ? &vt : &vn)->count++;
         } else if (kw.p[0] == 'f' || kw.p[0] == 'l' || kw.p[0] == 'p') {
             /* Assimp reads every statement starting with f, l or p as a
              * face, line or point ("lod 1" too) and fails on it, so such
              * statements must be exactly that. */
-            char b[48];
             if (kw.n != 1)
                 return fail_line(s, "unsupported OBJ statement '%s'", tok_str(kw, b));
             tok t;
             size_t count = 0;
             while (next_tok(&cur, &t)) {
-                tok v = t;
-                const char *slash = memchr(t.p, '/', t.n);
-                if (slash)
-                    v.n = (size_t)(slash - t.p);
-                long long i;
-                if (parse_int(v, &i) != NUM_OK)
-                    return fail_line(s, "bad vertex index '%s'", tok_str(t, b));
-                if (i == 0)
-                    return fail_line(s, "vertex index 0 (OBJ indices start at 1)");
-                if (i < 0 && (unsigned long long)(-i) > nv)
-                    return fail_line(s,
-                                     "relative vertex index -%llu reaches before the first vertex "
-                                     "(%llu defined so far)",
-                                     (unsigned long long)(-i), nv);
-                if (i > 0 && (unsigned long long)i > max_index) {
-                    max_index = (unsigned long long)i;
-                    max_line = s->line;
+                /* v, v/vt, v//vn or v/vt/vn. Assimp 5.2 throws on an index
+                 * of texture coordinates or normals out of range and leaks
+                 * the mesh (found by fuzz_mesh_obj), so all three are
+                 * checked, not only the vertex. */
+                obj_ref *refs[3] = {&v, &vt, &vn};
+                const char *p = t.p, *end = t.p + t.n;
+                for (int k = 0; k < 3 && p <= end; k++) {
+                    const char *slash = memchr(p, '/', (size_t)(end - p));
+                    tok f = {p, (size_t)((slash ? slash : end) - p)};
+                    if (f.n > 0 || k == 0) {
+                        if (!obj_index(s, f, t, refs[k]))
+                            return false;
+                    }
+                    if (!slash) {
+                        p = end + 1;
+                        break;
+                    }
+                    p = slash + 1;
+                    if (k == 2)
+                        return fail_line(s, "bad index '%s' (at most v/vt/vn)", tok_str(t, b));
                 }
                 if (++count > MAX_POLYGON)
                     return fail_line(s, "face with more than %d vertices", MAX_POLYGON);
@@ -344,12 +511,9 @@ static bool check_obj(stream *s)
         return false;
     /* OBJ lets a face name a vertex defined further down, so the range of
      * positive indices is only known at the end. */
-    if (max_index > nv) {
-        s->line = max_line;
-        return fail_line(s, "vertex index %llu out of range (the file has %llu vertices)",
-                         max_index, nv);
-    }
-    if (nv == 0) {
+    if (!obj_range(s, &v) || !obj_range(s, &vt) || !obj_range(s, &vn))
+        return false;
+    if (v.count == 0) {
         lanes_error_set(s->err, "%s: no vertices", s->path);
         return false;
     }
@@ -373,6 +537,36 @@ static int off_line(stream *s, const char **cur)
             *cur = p;
             return 1;
         }
+    }
+    return r;
+}
+
+/* A line of the vertex or face list. Assimp 5.2 skips only empty lines
+ * there: a comment or a line of blanks is read as a vertex (an error) or a
+ * face (dropped, and counted, so the last real face is lost; a run of
+ * such lines made it crash, found by fuzz_mesh_off). The OFF format allows
+ * comments anywhere, but a file that has them in its lists is not read
+ * correctly, so it is refused with the line. */
+static int off_body_line(stream *s, const char **cur, const char *what)
+{
+    int r;
+    while ((r = get_line(s)) > 0) {
+        if (s->ln_len == 0)
+            continue;
+        const char *p = s->ln;
+        while (*p && is_space(*p))
+            p++;
+        if (!*p || *p == '#') {
+            fail_line(s, "%s inside the %s list (Assimp cannot read OFF files with these; "
+                         "remove the line)",
+                      *p ? "comment" : "line of blanks", what);
+            return -1;
+        }
+        char *hash = strchr(s->ln, '#');
+        if (hash)
+            *hash = '\0';
+        *cur = p;
+        return 1;
     }
     return r;
 }
@@ -414,7 +608,7 @@ static bool check_off(stream *s)
         char b[48];
         if (have == 0 && tok_is(t, "BINARY"))
             return fail_line(s, "binary OFF is not supported");
-        if (parse_int(t, &counts[have]) != NUM_OK || counts[have] < 0)
+        if (parse_uint(t, &counts[have]) != NUM_OK)
             return fail_line(s, "bad count '%s' in the OFF header", tok_str(t, b));
         have++;
     }
@@ -427,7 +621,7 @@ static bool check_off(stream *s)
         return fail_line(s, "face count %llu exceeds the limit of %llu", nf,
                          (unsigned long long)LANES_SCENE_MAX_TRIANGLES);
     for (unsigned long long v = 0; v < nv; v++) {
-        r = off_line(s, &cur);
+        r = off_body_line(s, &cur, "vertex");
         if (r < 0)
             return false;
         if (r == 0)
@@ -436,25 +630,27 @@ static bool check_off(stream *s)
             return false;
     }
     for (unsigned long long f = 0; f < nf; f++) {
-        r = off_line(s, &cur);
+        r = off_body_line(s, &cur, "face");
         if (r < 0)
             return false;
         if (r == 0)
             return fail_line(s, "file ends after %llu of %llu faces (truncated?)", f, nf);
         long long n, i;
         char b[48];
-        if (!next_tok(&cur, &t) || parse_int(t, &n) != NUM_OK)
+        if (!next_tok(&cur, &t) || parse_uint(t, &n) != NUM_OK)
             return fail_line(s, "bad face: expected a vertex count, found '%s'", tok_str(t, b));
-        if (n < 1 || n > MAX_POLYGON)
-            return fail_line(s, "face with %s%llu vertices", n < 0 ? "-" : "",
-                             (unsigned long long)(n < 0 ? -n : n));
+        /* Assimp 5.2 drops OFF faces of more than 9 vertices without a
+         * word; refused rather than lost. */
+        if (n < 1 || n > MAX_OFF_POLYGON)
+            return fail_line(s, "face with %lld vertices (OFF faces here have 1 to %d)", n,
+                             MAX_OFF_POLYGON);
         for (long long k = 0; k < n; k++) {
             if (!next_tok(&cur, &t))
                 return fail_line(s, "face lists %llu of its %llu vertex indices",
                                  (unsigned long long)k, (unsigned long long)n);
-            if (parse_int(t, &i) != NUM_OK)
+            if (parse_uint(t, &i) != NUM_OK)
                 return fail_line(s, "bad vertex index '%s'", tok_str(t, b));
-            if (i < 0 || (unsigned long long)i >= nv)
+            if ((unsigned long long)i >= nv)
                 return fail_line(s, "vertex index %s out of range (the file has %llu vertices)",
                                  tok_str(t, b), nv);
         }
@@ -534,16 +730,23 @@ typedef struct ply_cursor {
     const char *cur; /* rest of the current ASCII line */
 } ply_cursor;
 
-/* Next ASCII token, across lines (PLY is token-based, not line-based). */
-static int ply_next_tok(stream *s, ply_cursor *c, tok *t)
+/* ASCII PLY as Assimp 5.2 reads it: one element per line. The format
+ * itself is a stream of tokens, but Assimp parses each element from its
+ * own line, so a file whose values wrap differently is read as other
+ * values ("0 00" on one line and its z on the next made it throw and leak
+ * the mesh, found by fuzz_mesh_ply). Blank lines between elements it
+ * skips. 1: a line in c; 0: end of file; -1: error. */
+static int ply_start_line(stream *s, ply_cursor *c)
 {
-    while (!next_tok(&c->cur, t)) {
-        int r = get_line(s);
-        if (r <= 0)
-            return r;
+    int r;
+    while ((r = get_line(s)) > 0) {
         c->cur = s->ln;
+        tok t;
+        const char *peek = s->ln;
+        if (next_tok(&peek, &t))
+            return 1;
     }
-    return 1;
+    return r;
 }
 
 static bool check_ply(stream *s)
@@ -593,12 +796,20 @@ static bool check_ply(stream *s)
             have_format = true;
         } else if (tok_is(kw, "element")) {
             long long n;
-            if (!next_tok(&cur, &t) || !next_tok(&cur, &u) || parse_int(u, &n) != NUM_OK || n < 0) {
+            if (!next_tok(&cur, &t) || !next_tok(&cur, &u) || parse_uint(u, &n) != NUM_OK) {
                 fail_line(s, "'element' needs a name and a count");
                 goto done;
             }
             if (nelems == 32) {
                 fail_line(s, "more than 32 elements");
+                goto done;
+            }
+            /* Assimp 5.2 keeps only the first triangle of a file's strips
+             * and leaks the index arrays of the others (found by
+             * fuzz_mesh_ply): silently wrong geometry, so refused. */
+            if (tok_is(t, "tristrips") && n > 0) {
+                fail_line(s, "element 'tristrips' is not supported (Assimp 5.2 drops all but "
+                             "the first triangle of the strips); store faces instead");
                 goto done;
             }
             ply_elem *e = realloc(elems, (size_t)(nelems + 1) * sizeof *e);
@@ -679,7 +890,7 @@ static bool check_ply(stream *s)
             nv = e->count;
             have_vertex = true;
         }
-        if (strcmp(e->name, "face") == 0 || strcmp(e->name, "tristrips") == 0)
+        if (strcmp(e->name, "face") == 0)
             have_faces = have_faces || e->count > 0;
     }
     if (!have_vertex || nv == 0 || nv > MAX_VERTICES) {
@@ -694,6 +905,13 @@ static bool check_ply(stream *s)
     for (int i = 0; i < nelems; i++) {
         ply_elem *e = &elems[i];
         for (unsigned long long j = 0; j < e->count; j++) {
+            if (fmt == PLY_ASCII) {
+                r = ply_start_line(s, &c);
+                if (r < 0)
+                    goto done;
+                if (r == 0)
+                    goto truncated;
+            }
             for (int k = 0; k < e->nprops; k++) {
                 ply_prop *p = &e->props[k];
                 unsigned long long at = stream_offset(s);
@@ -703,16 +921,20 @@ static bool check_ply(stream *s)
                 char b[48];
                 if (p->count_type >= 0) {
                     if (fmt == PLY_ASCII) {
-                        r = ply_next_tok(s, &c, &t);
-                        if (r < 0)
-                            goto done;
-                        if (r > 0 && parse_int(t, &n) != NUM_OK) {
+                        if (!next_tok(&c.cur, &t))
+                            goto short_line;
+                        if ((ply_types[p->count_type].is_signed ? parse_int(t, &n)
+                                                                : parse_uint(t, &n)) != NUM_OK) {
                             fail_line(s, "bad list length '%s'", tok_str(t, b));
                             goto done;
                         }
                     } else {
+                        /* v is only set when the read succeeds (at the end of
+                         * the file it was converted uninitialized: found by
+                         * UBSan under fuzz_mesh_ply_binary). */
                         r = ply_read_bin(s, fmt, p->count_type, &v);
-                        n = (long long)v;
+                        if (r > 0)
+                            n = (long long)v;
                     }
                     if (r == 0)
                         goto truncated;
@@ -728,15 +950,13 @@ static bool check_ply(stream *s)
                     at = stream_offset(s);
                     int num;
                     if (fmt == PLY_ASCII) {
-                        r = ply_next_tok(s, &c, &t);
-                        if (r < 0)
-                            goto done;
-                        if (r == 0)
-                            goto truncated;
-                        num = ply_types[p->type].is_float ? parse_real(t, &v) : NUM_OK;
+                        if (!next_tok(&c.cur, &t))
+                            goto short_line;
+                        num = ply_types[p->type].is_float ? parse_real_stream(t, &v) : NUM_OK;
                         if (!ply_types[p->type].is_float) {
                             long long iv = 0;
-                            num = parse_int(t, &iv);
+                            num = ply_types[p->type].is_signed ? parse_int(t, &iv)
+                                                               : parse_uint(t, &iv);
                             v = (double)iv;
                         }
                         if (num == NUM_BAD) {
@@ -770,7 +990,22 @@ static bool check_ply(stream *s)
                     }
                 }
             }
+            if (fmt == PLY_ASCII) {
+                tok t;
+                char b[48];
+                if (next_tok(&c.cur, &t)) {
+                    fail_line(s, "'%s' after the last property of element '%s' %llu (one "
+                                 "element per line)",
+                              tok_str(t, b), e->name, j);
+                    goto done;
+                }
+            }
             continue;
+        short_line:
+            fail_line(s, "element '%s' %llu has fewer values than properties (one element per "
+                         "line)",
+                      e->name, j);
+            goto done;
         truncated:
             if (fmt == PLY_ASCII)
                 fail_line(s, "file ends in element '%s' %llu of %llu (truncated?)", e->name, j,
@@ -810,9 +1045,23 @@ static bool check_stl_binary(stream *s, unsigned long count)
     return true;
 }
 
+/* Assimp reads ASCII STL as a stream of tokens, not of lines: a token
+ * left over on a line becomes the next statement for it (a "facet normal
+ * 0 0 1 endloop" made it build a facet without vertices, then throw, and
+ * leak the mesh; found by fuzz_mesh_stl). So statements must end where
+ * their line does. */
+static bool stl_line_ends(stream *s, const char *cur, const char *what)
+{
+    tok t;
+    char b[48];
+    if (next_tok(&cur, &t))
+        return fail_line(s, "unexpected '%s' after '%s'", tok_str(t, b), what);
+    return true;
+}
+
 static bool check_stl_ascii(stream *s)
 {
-    bool in_facet = false, in_loop = false;
+    bool in_facet = false, in_loop = false, had_loop = false;
     int nvert = 0;
     unsigned long long facets = 0;
     int r;
@@ -835,33 +1084,43 @@ static bool check_stl_ascii(stream *s)
                 return fail_line(s, "expected 'facet normal nx ny nz'");
             for (int k = 0; k < 3; k++) {
                 double v;
-                if (!next_tok(&cur, &t) || parse_real(t, &v) == NUM_BAD)
+                if (!next_tok(&cur, &t) || parse_real_stream(t, &v) == NUM_BAD)
                     return fail_line(s, "expected 'facet normal nx ny nz'");
             }
+            if (!stl_line_ends(s, cur, "facet normal nx ny nz"))
+                return false;
             in_facet = true;
+            had_loop = false;
             nvert = 0;
         } else if (tok_is(kw, "outer")) {
             tok t;
             if (!next_tok(&cur, &t) || !tok_is(t, "loop"))
                 return fail_line(s, "expected 'outer loop'");
-            if (!in_facet || in_loop)
-                return fail_line(s, "'outer loop' outside a facet");
+            if (!stl_line_ends(s, cur, "outer loop"))
+                return false;
+            if (!in_facet || in_loop || had_loop)
+                return fail_line(s, "'outer loop' outside a facet, or a second one in it");
             in_loop = true;
         } else if (tok_is(kw, "vertex")) {
             if (!in_loop)
                 return fail_line(s, "'vertex' outside a loop");
-            if (!read_xyz(s, &cur, "vertex"))
+            if (!read_xyz(s, &cur, "vertex") || !stl_line_ends(s, cur, "vertex x y z"))
                 return false;
             nvert++;
         } else if (tok_is(kw, "endloop")) {
+            if (!stl_line_ends(s, cur, "endloop"))
+                return false;
             if (!in_loop)
                 return fail_line(s, "'endloop' without 'outer loop'");
             if (nvert != 3)
                 return fail_line(s, "facet with %llu vertices (STL facets are triangles)",
                                  (unsigned long long)nvert);
             in_loop = false;
+            had_loop = true;
         } else if (tok_is(kw, "endfacet")) {
-            if (!in_facet || in_loop)
+            if (!stl_line_ends(s, cur, "endfacet"))
+                return false;
+            if (!in_facet || !had_loop)
                 return fail_line(s, "'endfacet' without a complete facet");
             in_facet = false;
             facets++;
@@ -1005,7 +1264,14 @@ static FILE *open_mesh(const char *path, long long *size, lanes_error *err)
         lanes_error_set(err, "%s: is a directory, not a mesh file", path);
         return NULL;
     }
-    if (S_ISREG(st.st_mode) && st.st_size == 0) {
+    /* A FIFO would block fopen until a writer comes (forever, for a
+     * stray mkfifo), and Assimp reads devices by their stat size; a mesh
+     * is a file. */
+    if (!S_ISREG(st.st_mode)) {
+        lanes_error_set(err, "%s: not a regular file (a device, FIFO or socket)", path);
+        return NULL;
+    }
+    if (st.st_size == 0) {
         lanes_error_set(err, "%s: empty file", path);
         return NULL;
     }
@@ -1053,15 +1319,105 @@ bool lanes_mesh_precheck(const char *path, lanes_error *err)
 
 #define MAX_GLTF_JSON (64u << 20)
 
+/* A glTF integer as Assimp's reader takes it: 2.5 or 1e0 are not one
+ * (rapidjson keeps them as doubles, and Assimp then ignores the member,
+ * where cJSON's valueint would silently truncate). -1: not an integer in
+ * [0, max]. */
+static long long gltf_int(const cJSON *v, double max)
+{
+    if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0 && v->valuedouble <= max) ||
+        v->valuedouble != floor(v->valuedouble))
+        return -1;
+    return (long long)v->valuedouble;
+}
+
 static long long accessor_count(const cJSON *accessors, const cJSON *index)
 {
-    if (!cJSON_IsNumber(index))
+    long long i = gltf_int(index, INT_MAX);
+    const cJSON *a = i >= 0 ? cJSON_GetArrayItem(accessors, (int)i) : NULL;
+    return a ? gltf_int(cJSON_GetObjectItemCaseSensitive(a, "count"), 1e15) : -1;
+}
+
+/* Data URIs that Assimp 5.2 misreads: it leaks its buffers when the data
+ * holds a character outside base64, and it keeps the offsets of the
+ * parts of a URI in a signed char, so a media type of more than about 120
+ * characters makes it read before the string (found by fuzz_mesh_gltf).
+ * Both are refused here, for buffers and images alike. */
+static bool check_data_uris(const char *path, const cJSON *root, const char *array,
+                            lanes_error *err)
+{
+    const cJSON *it;
+    int i = 0;
+    cJSON_ArrayForEach(it, cJSON_GetObjectItemCaseSensitive(root, array))
+    {
+        const cJSON *uri = cJSON_GetObjectItemCaseSensitive(it, "uri");
+        const char *u = cJSON_IsString(uri) ? uri->valuestring : NULL;
+        if (u && strncmp(u, "data:", 5) == 0) {
+            const char *comma = strchr(u, ',');
+            if (!comma || comma - u > 100) {
+                lanes_error_set(err, "%s: %s[%d].uri: malformed data URI (%s)", path, array, i,
+                                comma ? "header longer than 100 characters" : "no ','");
+                return false;
+            }
+            bool b64 = false;
+            for (const char *p = u; p < comma; p++)
+                b64 = b64 || (*p == ';' && strncmp(p + 1, "base64", 6) == 0);
+            for (const char *q = comma + 1; b64 && *q; q++) {
+                if (!isalnum((unsigned char)*q) && *q != '+' && *q != '/' && *q != '=') {
+                    lanes_error_set(err, "%s: %s[%d].uri: invalid base64 data", path, array, i);
+                    return false;
+                }
+            }
+        }
+        i++;
+    }
+    return true;
+}
+
+static void le32(const unsigned char *b, uint32_t *w, int n)
+{
+    for (int i = 0; i < n; i++)
+        w[i] = (uint32_t)b[4 * i] | (uint32_t)b[4 * i + 1] << 8 | (uint32_t)b[4 * i + 2] << 16 |
+               (uint32_t)b[4 * i + 3] << 24;
+}
+
+/* The sizes in a GLB 2 header (w: magic, version, total length, first
+ * chunk length, its type) and of the binary chunk after it. Assimp 5.2
+ * allocates each before reading a byte (a 600-byte file claiming a 1.5 GB
+ * JSON chunk made it allocate that, found by fuzz_mesh_glb), so each must
+ * fit in the file. 1: fine; 0: cannot tell (Assimp decides); -1: error
+ * (message set). */
+static int glb_sizes(const char *path, FILE *f, const uint32_t w[5], lanes_error *err)
+{
+    if (fseek(f, 0, SEEK_END) != 0)
+        return 0;
+    long size = ftell(f);
+    if (size < 20)
+        return 0;
+    unsigned long long n = (unsigned long long)size;
+    if (w[2] > n || w[3] > n - 20) {
+        lanes_error_set(err,
+                        "%s: the GLB header declares %lu bytes and a first chunk of %lu, but "
+                        "the file has %llu bytes (truncated?)",
+                        path, (unsigned long)w[2], (unsigned long)w[3], n);
         return -1;
-    const cJSON *a = cJSON_GetArrayItem(accessors, index->valueint);
-    const cJSON *count = a ? cJSON_GetObjectItemCaseSensitive(a, "count") : NULL;
-    if (!cJSON_IsNumber(count) || count->valuedouble < 0 || count->valuedouble > 1e15)
-        return -1;
-    return (long long)count->valuedouble;
+    }
+    /* Version 2: the binary chunk that may follow, padded to 4 bytes. */
+    unsigned long long at = 20ull + ((w[3] + 3ull) & ~3ull);
+    unsigned char h[8];
+    uint32_t c[2];
+    if (at + 8 <= w[2] && fseek(f, (long)at, SEEK_SET) == 0 &&
+        fread(h, 1, sizeof h, f) == sizeof h) {
+        le32(h, c, 2);
+        if (c[0] > n - at - 8) {
+            lanes_error_set(err,
+                            "%s: byte %llu: GLB chunk of %lu bytes, but the file ends %llu "
+                            "bytes later (truncated?)",
+                            path, at, (unsigned long)c[0], n - at - 8);
+            return -1;
+        }
+    }
+    return 1;
 }
 
 /* Triangles the file's primitives describe. Assimp's glTF importer drops a
@@ -1081,14 +1437,34 @@ static int gltf_expected(const char *path, unsigned long long *expected, lanes_e
     int result = 0;
     if (glb) {
         unsigned char h[20];
-        if (fread(h, 1, sizeof h, f) != sizeof h)
-            goto done;
         uint32_t w[5];
-        for (int i = 0; i < 5; i++)
-            w[i] = (uint32_t)h[4 * i] | (uint32_t)h[4 * i + 1] << 8 | (uint32_t)h[4 * i + 2] << 16 |
-                   (uint32_t)h[4 * i + 3] << 24;
-        if (w[0] != 0x46546C67u || w[1] != 2 || w[4] != 0x4E4F534Au || w[3] > MAX_GLTF_JSON)
-            goto done; /* not a GLB 2 with a JSON chunk first: Assimp decides */
+        if (fread(h, 1, sizeof h, f) != sizeof h) {
+            lanes_error_set(err, "%s: not a GLB file (shorter than its 20-byte header)", path);
+            result = -1;
+            goto done;
+        }
+        le32(h, w, 5);
+        /* Assimp would try every other importer on a .glb without the
+         * magic (see known_extension). */
+        if (w[0] != 0x46546C67u || w[1] != 2) {
+            lanes_error_set(err, "%s: not a GLB 2 file (%s)", path,
+                            w[0] != 0x46546C67u ? "no 'glTF' magic" : "another version");
+            result = -1;
+            goto done;
+        }
+        int sz = glb_sizes(path, f, w, err);
+        if (sz <= 0) {
+            result = sz;
+            goto done;
+        }
+        if (w[4] != 0x4E4F534Au || w[3] > MAX_GLTF_JSON) {
+            lanes_error_set(err, "%s: the first GLB chunk is %s", path,
+                            w[4] != 0x4E4F534Au ? "not JSON" : "JSON of more than 64 MiB");
+            result = -1;
+            goto done;
+        }
+        if (fseek(f, (long)sizeof h, SEEK_SET) != 0)
+            goto done;
         len = w[3];
     } else {
         if (fseek(f, 0, SEEK_END) != 0)
@@ -1117,49 +1493,74 @@ static int gltf_expected(const char *path, unsigned long long *expected, lanes_e
         result = -1;
         goto done;
     }
-    /* Assimp 5.2 leaks its buffers when a data URI holds a character
-     * outside base64, so that is refused here. */
-    const cJSON *buf;
-    int bi = 0;
-    cJSON_ArrayForEach(buf, cJSON_GetObjectItemCaseSensitive(root, "buffers"))
-    {
-        const cJSON *uri = cJSON_GetObjectItemCaseSensitive(buf, "uri");
-        const char *u = cJSON_IsString(uri) ? uri->valuestring : NULL;
-        const char *b64 = u && strncmp(u, "data:", 5) == 0 ? strstr(u, ";base64,") : NULL;
-        for (const char *q = b64 ? b64 + 8 : ""; *q; q++) {
-            if (!isalnum((unsigned char)*q) && *q != '+' && *q != '/' && *q != '=') {
-                lanes_error_set(err, "%s: buffers[%d].uri: invalid base64 data", path, bi);
-                cJSON_Delete(root);
-                result = -1;
-                goto done;
-            }
-        }
-        bi++;
+    /* Both glTF importers require asset.version; a file they both refuse
+     * goes to every other importer (see known_extension). */
+    const cJSON *asset = cJSON_GetObjectItemCaseSensitive(root, "asset");
+    const cJSON *version = cJSON_GetObjectItemCaseSensitive(asset, "version");
+    const char *v = cJSON_IsString(version) ? version->valuestring : "";
+    if (v[0] != '2' && (glb || strcmp(v, "1.0") != 0)) {
+        lanes_error_set(err, "%s: not a glTF file: asset.version must be \"2.0\"%s", path,
+                        glb ? "" : " (or \"1.0\")");
+        cJSON_Delete(root);
+        result = -1;
+        goto done;
+    }
+    if (!check_data_uris(path, root, "buffers", err) || !check_data_uris(path, root, "images", err)) {
+        cJSON_Delete(root);
+        result = -1;
+        goto done;
     }
     const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
     const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
     unsigned long long tris = 0;
     result = 1;
     const cJSON *m;
+    int mi = 0;
     cJSON_ArrayForEach(m, meshes)
     {
         const cJSON *p, *prims = cJSON_GetObjectItemCaseSensitive(m, "primitives");
+        int pi = -1;
         cJSON_ArrayForEach(p, prims)
         {
+            pi++;
             const cJSON *mode = cJSON_GetObjectItemCaseSensitive(p, "mode");
             const cJSON *attrs = cJSON_GetObjectItemCaseSensitive(p, "attributes");
             const cJSON *idx = cJSON_GetObjectItemCaseSensitive(p, "indices");
-            int md = cJSON_IsNumber(mode) ? mode->valueint : 4;
-            if (md < 4 || md > 6)
-                continue; /* points and lines */
+            long long md = mode ? gltf_int(mode, 6) : 4;
             const cJSON *pos = cJSON_GetObjectItemCaseSensitive(attrs, "POSITION");
             long long n = accessor_count(accessors, idx ? idx : pos);
+            /* Assimp 5.2 sizes a strip's or fan's faces as count - 2 (a
+             * line strip's as count - 1) in unsigned arithmetic, and a
+             * primitive whose positions it cannot find (none, or an index
+             * of 0.7) has count 0: it then allocates 64 GiB (found by
+             * fuzz_mesh_gltf). Such primitives draw nothing, so they are
+             * refused rather than passed on. */
+            bool strip = md == 3 || md == 5 || md == 6;
+            long long need = md == 3 ? 2 : strip ? 3 : 1;
+            const char *bad = NULL;
+            if (md < 0)
+                bad = "mode is not an integer from 0 to 6";
+            else if (!pos)
+                bad = "no POSITION attribute";
+            else if (strip && n < 0)
+                bad = "a strip or fan without a valid accessor index and count";
+            else if (n >= 0 && n < need)
+                bad = "too few vertices for its mode";
+            if (bad) {
+                lanes_error_set(err, "%s: meshes[%d].primitives[%d]: %s", path, mi, pi, bad);
+                result = -1;
+                cJSON_Delete(root);
+                goto done;
+            }
+            if (md < 4 || md > 6)
+                continue; /* points and lines */
             if (!pos || n < 0) {
                 result = 0;
                 continue;
             }
             tris += (unsigned long long)(md == 4 ? n / 3 : n > 2 ? n - 2 : 0);
         }
+        mi++;
     }
     *expected = tris;
     cJSON_Delete(root);
@@ -1170,6 +1571,85 @@ done:
 }
 
 /* ---- Assimp ---- */
+
+/* Every file Assimp opens goes through these callbacks: the mesh, and the
+ * files it names (an OBJ's mtllib, a glTF's buffers and images). Only
+ * regular files open. Assimp's own file system opens whatever fopen opens,
+ * directories included: "mtllib /" made it open the OBJ's directory, fail
+ * to read it and leak the stream (found by fuzz_mesh_obj), and a FIFO would
+ * block it. Read-only: Assimp never needs to write here. */
+static FILE *io_file(struct aiFile *a)
+{
+    return (FILE *)(void *)a->UserData;
+}
+
+static size_t io_read(struct aiFile *a, char *buf, size_t size, size_t count)
+{
+    return size && count ? fread(buf, size, count, io_file(a)) : 0;
+}
+
+static size_t io_write(struct aiFile *a, const char *buf, size_t size, size_t count)
+{
+    (void)a;
+    (void)buf;
+    (void)size;
+    (void)count;
+    return 0;
+}
+
+static size_t io_tell(struct aiFile *a)
+{
+    long p = ftell(io_file(a));
+    return p < 0 ? 0 : (size_t)p;
+}
+
+static size_t io_size(struct aiFile *a)
+{
+    struct stat st;
+    return fstat(fileno(io_file(a)), &st) == 0 ? (size_t)st.st_size : 0;
+}
+
+static enum aiReturn io_seek(struct aiFile *a, size_t offset, enum aiOrigin origin)
+{
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    return fseek(io_file(a), (long)offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+}
+
+static void io_flush(struct aiFile *a)
+{
+    (void)a;
+}
+
+static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char *mode)
+{
+    (void)io;
+    struct stat st;
+    if (strpbrk(mode, "wa+") || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return NULL;
+    struct aiFile *a = calloc(1, sizeof *a);
+    FILE *f = a ? fopen(path, "rb") : NULL;
+    if (!f) {
+        free(a);
+        return NULL;
+    }
+    a->ReadProc = io_read;
+    a->WriteProc = io_write;
+    a->TellProc = io_tell;
+    a->FileSizeProc = io_size;
+    a->SeekProc = io_seek;
+    a->FlushProc = io_flush;
+    a->UserData = (aiUserData)(void *)f;
+    return a;
+}
+
+static void io_close(struct aiFileIO *io, struct aiFile *a)
+{
+    (void)io;
+    if (a) {
+        fclose(io_file(a));
+        free(a);
+    }
+}
 
 /* Assimp's own messages rarely name the file; some do, most do not. */
 static void assimp_error(const char *path, const char *what, lanes_error *err)
@@ -1373,10 +1853,33 @@ static bool weld(lanes_mesh *m)
     return true;
 }
 
+/* For an extension no importer claims, Assimp tries every importer on the
+ * content, so glTF text in a .dat file reached the glTF importer without
+ * the glTF checks here (and leaked, found by fuzzing unknown extensions);
+ * the same goes for OBJ text, which Assimp recognizes by a "v " at the
+ * start of any line. Only extensions Assimp knows are passed on. */
+static bool known_extension(const char *path, lanes_error *err)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    char ext[40];
+    if (dot && dot != base && dot[1] && strlen(dot) < sizeof ext) {
+        snprintf(ext, sizeof ext, "%s", dot);
+        if (aiIsExtensionSupported(ext))
+            return true;
+    }
+    lanes_error_set(err,
+                    "%s: cannot import: %s (mesh files need the extension of their format: "
+                    ".obj, .ply, .off, .stl, .gltf, .glb, or another Assimp reads)",
+                    path, dot && dot != base && dot[1] ? "unknown file extension" : "no file extension");
+    return false;
+}
+
 bool lanes_mesh_read(const char *path, lanes_mesh *out, lanes_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (!lanes_mesh_precheck(path, err))
+    if (!lanes_mesh_precheck(path, err) || !known_extension(path, err))
         return false;
     unsigned long long expected = 0;
     int gl = gltf_expected(path, &expected, err);
@@ -1390,7 +1893,8 @@ bool lanes_mesh_read(const char *path, lanes_mesh *out, lanes_error *err)
     }
     /* Skeleton-only meshes are bone visualizations, not geometry. */
     aiSetImportPropertyInteger(props, AI_CONFIG_IMPORT_NO_SKELETON_MESHES, 1);
-    const struct aiScene *sc = aiImportFileExWithProperties(path, 0, NULL, props);
+    struct aiFileIO io = {io_open, io_close, NULL};
+    const struct aiScene *sc = aiImportFileExWithProperties(path, 0, &io, props);
     aiReleasePropertyStore(props);
     if (!sc) {
         assimp_error(path, "cannot import", err);

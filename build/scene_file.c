@@ -924,6 +924,11 @@ bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
         lanes_error_set(err, "%s: is a directory, not a scene file", path);
         return false;
     }
+    /* fopen of a FIFO blocks until a writer comes: never, for a stray one. */
+    if (!S_ISREG(st.st_mode)) {
+        lanes_error_set(err, "%s: not a regular file (a device, FIFO or socket)", path);
+        return false;
+    }
     if (st.st_size > (off_t)MAX_SCENE_FILE) {
         lanes_error_set(err,
                         "%s: %lld bytes: larger than the %u bytes a scene file may have "

@@ -10,6 +10,7 @@
 #include "build/scenes_builtin.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -34,8 +35,13 @@ static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
     grey.color[0] = grey.color[1] = grey.color[2] = 0.8f;
     grey.ior = 1.5f;
     uint32_t mat;
-    if (!lanes_scene_add_material(out, &grey, &mat, err) ||
-        !lanes_mesh_import(out, path, NULL, mat, err)) {
+    lanes_error why;
+    if (!lanes_scene_add_material(out, &grey, &mat, &why)) {
+        lanes_error_set(err, "%s: %s", path, why.message);
+        lanes_scene_free(out);
+        return false;
+    }
+    if (!lanes_mesh_import(out, path, NULL, mat, err)) {
         lanes_scene_free(out);
         return false;
     }
@@ -47,9 +53,24 @@ static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
     for (int a = 0; a < 3; a++)
         d2 += ((double)c->eye[a] - c->target[a]) * ((double)c->eye[a] - c->target[a]);
     double up = 0.5 * sqrt(d2);
+    /* The mesh itself was checked on import; what can still fail is the
+     * camera and light placed for it, whose intensity grows with the
+     * squared distance: past about 1e18 units that overflows a float, and
+     * validation would then blame a "non-finite point light" that is not
+     * in the file. */
+    double limit = FLT_MAX / 2.0;
+    if (!(1.5 * d2 < limit) || !(fabs(c->eye[0]) + up < limit) || !(fabs(c->eye[1]) + up < limit)) {
+        lanes_error_set(err,
+                        "%s: the mesh is too large to frame (coordinates or extent beyond about "
+                        "1e18): the light's intensity would overflow a float",
+                        path);
+        lanes_scene_free(out);
+        return false;
+    }
     lanes_point_light l = {{c->eye[0] + (float)up, c->eye[1] + (float)up, c->eye[2]},
                            {(float)(1.5 * d2), (float)(1.5 * d2), (float)(1.5 * d2)}};
-    if (!lanes_scene_add_point_light(out, &l, err) || !lanes_scene_validate(out, err)) {
+    if (!lanes_scene_add_point_light(out, &l, &why) || !lanes_scene_validate(out, &why)) {
+        lanes_error_set(err, "%s: %s", path, why.message);
         lanes_scene_free(out);
         return false;
     }

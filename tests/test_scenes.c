@@ -728,7 +728,7 @@ static const bad_case bad_meshes[] = {
     {"!nan_bin.stl", {"byte", "not finite"}},
     {"!trunc_bin.ply", {"byte", "truncated"}},
     {"!oob_bin.ply", {"byte", "out of range"}},
-    {"!trunc.glb", {"cannot import"}},
+    {"!trunc.glb", {"GLB header", "truncated"}},
 };
 
 static const bad_case bad_scenes[] = {

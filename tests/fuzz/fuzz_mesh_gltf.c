@@ -1,0 +1,5 @@
+/* libFuzzer target: GLTF mesh files through lanes_mesh_read and lanes_scene_load
+ * (see fuzz_mesh.h for the contract; seeds in corpus/fuzz_mesh_gltf/). */
+#include "tests/fuzz/fuzz_mesh.h"
+
+LANES_FUZZ_MESH_TARGET("gltf")
