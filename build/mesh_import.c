@@ -772,15 +772,31 @@ static bool check_ply(stream *s)
         const char *cur = s->ln;
         tok kw, t, u, v;
         char b[48];
-        if (!next_tok(&cur, &kw))
+        bool blank = !next_tok(&cur, &kw);
+        /* Assimp 5.2 reads the format from the line after "ply" and from
+         * no other: a comment before it is an error to Assimp, and a
+         * second format line, which this check used to follow, made the
+         * two read different encodings (found by fuzz_mesh_ply). */
+        if (!have_format && (blank || !tok_is(kw, "format"))) {
+            fail_line(s, "the line after 'ply' must be 'format ascii|binary_little_endian|"
+                         "binary_big_endian 1.0'");
+            goto done;
+        }
+        if (blank)
             continue;
         if (tok_is(kw, "end_header"))
             break;
         if (tok_is(kw, "comment") || tok_is(kw, "obj_info"))
             continue;
         if (tok_is(kw, "format")) {
-            if (!next_tok(&cur, &t)) {
-                fail_line(s, "'format' without a format");
+            if (have_format) {
+                fail_line(s, "a second 'format' line");
+                goto done;
+            }
+            if (!next_tok(&cur, &t) || !next_tok(&cur, &u) || !tok_is(u, "1.0") ||
+                next_tok(&cur, &v)) {
+                fail_line(s, "expected 'format ascii|binary_little_endian|binary_big_endian "
+                             "1.0'");
                 goto done;
             }
             if (tok_is(t, "ascii"))
