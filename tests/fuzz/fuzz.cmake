@@ -21,6 +21,10 @@
 # it is for fuzzing, not for the other tests.
 option(LANES_FUZZ "Build the libFuzzer targets of tests/fuzz (clang only)" OFF)
 set(LANES_FUZZ_SECONDS 60 CACHE STRING "How long each fuzz test runs (seconds)")
+# A fixed seed makes a run repeatable: CI meets the same inputs each time,
+# and a failure it reports can be reproduced. 0 lets libFuzzer pick one
+# (longer local sessions explore more that way).
+set(LANES_FUZZ_SEED 1 CACHE STRING "libFuzzer -seed of the fuzz tests (0: random)")
 
 if(NOT TARGET lanes_scene)
   message(STATUS "lanes: no lanes_scene library; fuzz targets not added")
@@ -70,7 +74,7 @@ foreach(t IN LISTS lanes_fuzz_targets)
             -DSEEDS=${lanes_fuzz_dir}/corpus/${t}
             -DCORPUS=${CMAKE_CURRENT_BINARY_DIR}/fuzz/corpus/${t}
             -DARTIFACTS=${CMAKE_CURRENT_BINARY_DIR}/fuzz/artifacts/${t}
-            -DSECONDS=${LANES_FUZZ_SECONDS}
+            -DSECONDS=${LANES_FUZZ_SECONDS} -DSEED=${LANES_FUZZ_SEED}
             -DDICT=${dict}
             -P ${lanes_fuzz_dir}/run_fuzzer.cmake)
   set_tests_properties(fuzz.${short} PROPERTIES LABELS fuzz TIMEOUT ${lanes_fuzz_timeout})
