@@ -24,6 +24,10 @@
 #include "trace/render.h"
 #include "trace/shading.h"
 
+/* Every scene is studied in one mode, so its rows compare across scenes
+ * (a scene file's "accuracy" is for rendering it). */
+#define LANES_STUDY_ACCURACY LANES_ACCURACY_DEFAULT
+
 /* One measurement. Rows with rays == "all" carry the render's time; rows
  * per ray type carry that type's counts and utilisation (and the render's
  * time, for reference). NaN where a figure does not apply. */
@@ -116,6 +120,7 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
     lanes_packet_render_options po;
     lanes_packet_render_default_options(&po);
     po.base.isa = isa;
+    po.base.accuracy = LANES_STUDY_ACCURACY;
     po.base.width = plan->width;
     po.base.height = plan->height;
     po.base.threads = plan->threads;
@@ -185,6 +190,7 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
     lanes_packet_render_options po;
     lanes_packet_render_default_options(&po);
     po.base.isa = isa;
+    po.base.accuracy = LANES_STUDY_ACCURACY;
     po.base.scheme = scheme;
     po.base.width = plan->width;
     po.base.height = plan->height;
@@ -429,8 +435,9 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
     if (!f) cli_fail("study: cannot write %s: %s", path, strerror(errno));
     const lanes_cpu_features *cpu = lanes_cpu();
     fprintf(f, "# lanes width-scaling study\n\nCPU: %s. Image %dx%d, packets of %d rays, %d thread(s), "
-               "median of %d run(s). Times in seconds.\n\n",
-            cpu->brand, plan->width, plan->height, plan->packet, plan->threads, plan->reps);
+               "accuracy mode %s, median of %d run(s). Times in seconds.\n\n",
+            cpu->brand, plan->width, plan->height, plan->packet, plan->threads,
+            lanes_accuracy_name(LANES_STUDY_ACCURACY), plan->reps);
     const char *queues[] = {"none", "CORNER", "MAX", "arrival"};
     int best_q = plan->queue_size_count ? plan->queue_sizes[0] : 1024;
 

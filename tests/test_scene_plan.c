@@ -12,6 +12,9 @@
  *    leave); in robust mode it is lit like the same sphere at the origin.
  * 4. Without lights and mirrors no hit geometry is read, and the image is
  *    still right: ambient light on the hit material.
+ * 5. Through the API: both renderers' default options take the scene
+ *    file's mode (the far sphere renders exactly as in robust mode), and an
+ *    unknown mode is refused with a message.
  *
  *   test_scene_plan DATA_DIR */
 #define _POSIX_C_SOURCE 200809L
@@ -22,6 +25,7 @@
 
 #include "build/scene_load.h"
 #include "build/scenes_builtin.h"
+#include "trace/packet_render.h"
 #include "trace/render.h"
 #include "trace/scene_plan.h"
 
@@ -139,8 +143,9 @@ static void recommendation(void)
     }
 }
 
-/* Mean radiance of a 128x128 render of the scene, single-ray wide scheme. */
-static double mean_radiance(const lanes_scene *s, lanes_accuracy mode)
+/* Mean radiance of a 128x128 render of the scene: the single-ray wide
+ * scheme, or (packets) the packet renderer's default scheme. */
+static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool packets)
 {
     const lanes_kernels *k = lanes_kernels_current();
     lanes_accel a;
@@ -149,13 +154,19 @@ static double mean_radiance(const lanes_scene *s, lanes_accuracy mode)
         printf("FAIL: %s\n", err.message);
         return NAN;
     }
+    lanes_packet_render_options po;
+    lanes_packet_render_default_options(&po);
     lanes_render_options o;
     lanes_render_default_options(&o);
+    CHECK(o.accuracy == LANES_ACCURACY_FROM_SCENE && po.base.accuracy == LANES_ACCURACY_FROM_SCENE,
+          "default render options take the scene file's accuracy mode (have %d, %d)", (int)o.accuracy,
+          (int)po.base.accuracy);
     o.accuracy = mode;
     o.width = o.height = 128;
+    po.base = o;
     lanes_render_result r;
     double sum = NAN;
-    if (lanes_render(s, &a, &o, &r, &err)) {
+    if (packets ? lanes_packet_render(s, &a, &po, &r, NULL, &err) : lanes_render(s, &a, &o, &r, &err)) {
         sum = 0.0;
         for (size_t i = 0; i < (size_t)r.width * (size_t)r.height * 3; i++) sum += r.rgb[i];
         sum /= (double)r.width * (double)r.height * 3.0;
@@ -197,9 +208,19 @@ static void far_scene(const char *data_dir)
     near.point_lights[0].position[0] -= 100000.0f;
     near.camera.eye[0] -= 100000.0f;
     near.camera.target[0] -= 100000.0f;
-    double ref = mean_radiance(&near, LANES_ACCURACY_DEFAULT);
-    double robust = mean_radiance(&far, LANES_ACCURACY_ROBUST);
-    double plain = mean_radiance(&far, LANES_ACCURACY_DEFAULT);
+    double ref = mean_radiance(&near, LANES_ACCURACY_DEFAULT, false);
+    double robust = mean_radiance(&far, LANES_ACCURACY_ROBUST, false);
+    double plain = mean_radiance(&far, LANES_ACCURACY_DEFAULT, false);
+    /* the renders are deterministic, so "from the scene" must match exactly */
+    double from_scene = mean_radiance(&far, LANES_ACCURACY_FROM_SCENE, false);
+    CHECK(from_scene == robust, "lanes_render with the scene file's mode: %.6f, robust %.6f", from_scene,
+          robust);
+    double packet_robust = mean_radiance(&far, LANES_ACCURACY_ROBUST, true);
+    double packet_from_scene = mean_radiance(&far, LANES_ACCURACY_FROM_SCENE, true);
+    double packet_plain = mean_radiance(&far, LANES_ACCURACY_DEFAULT, true);
+    CHECK(packet_from_scene == packet_robust && packet_plain != packet_robust,
+          "lanes_packet_render with the scene file's mode: %.6f, robust %.6f, default %.6f",
+          packet_from_scene, packet_robust, packet_plain);
     printf("far sphere mean radiance: %.5f robust, %.5f default; at the origin %.5f\n", robust, plain, ref);
     /* 1e5 rounds the sphere's vertices to 1/128 (measured: 0.05% darker) */
     CHECK(fabs(robust - ref) <= 0.01 * ref, "robust far sphere %.5f vs %.5f at the origin", robust, ref);
@@ -238,6 +259,11 @@ static void no_geometry_needed(void)
     } else {
         CHECK(false, "%s", err.message);
     }
+    o.accuracy = (lanes_accuracy)LANES_ACCURACY_COUNT;
+    bool rendered = lanes_render(&s, &a, &o, &r, &err);
+    CHECK(!rendered && strstr(err.message, "accuracy mode"), "an unknown accuracy mode: %s",
+          rendered ? "rendered" : err.message);
+    if (rendered) lanes_render_result_free(&r);
     lanes_accel_free(&a);
     lanes_scene_free(&s);
 }

@@ -39,6 +39,9 @@
 #include <string.h>
 
 typedef enum lanes_accuracy {
+    /* Render options only: the scene file's "accuracy", else default. The
+     * renderers resolve it before any kernel sees it. */
+    LANES_ACCURACY_FROM_SCENE = -1,
     LANES_ACCURACY_FAST = 0,
     LANES_ACCURACY_DEFAULT = 1,
     LANES_ACCURACY_ROBUST = 2,

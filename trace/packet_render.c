@@ -104,7 +104,8 @@ static bool push_shadow(shadow_list *l, pending_shadow r)
 typedef struct {
     const lanes_scene *scene;
     const lanes_accel *accel;
-    const lanes_packet_render_options *opt;
+    const lanes_packet_render_options *opt; /* = &resolved */
+    lanes_packet_render_options resolved;   /* the caller's, with the accuracy mode resolved */
     const lanes_kernels *k;
     float eps;
     lanes_scene_plan plan;
@@ -610,8 +611,16 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
     job.qx = (job.width + side - 1) / side;
     job.qy = (job.height + side - 1) / side;
     job.quads = (size_t)job.qx * (size_t)job.qy;
-    job.eps = lanes_scene_epsilon(scene);
+    if (opt->base.accuracy < LANES_ACCURACY_FROM_SCENE || opt->base.accuracy >= LANES_ACCURACY_COUNT) {
+        snprintf(err->message, sizeof err->message, "render: accuracy mode %d unknown",
+                 (int)opt->base.accuracy);
+        return false;
+    }
     lanes_scene_plan_make(scene, opt->base.accuracy, &job.plan);
+    job.resolved = *opt;
+    job.resolved.base.accuracy = job.plan.accuracy;
+    job.opt = &job.resolved;
+    job.eps = lanes_scene_epsilon(scene);
     const lanes_camera *c = &scene->camera;
     job.eye = v3_load(c->eye);
     job.fwd = v3_normalize(v3_sub(v3_load(c->target), job.eye));

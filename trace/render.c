@@ -32,7 +32,7 @@ void lanes_render_default_options(lanes_render_options *o)
     memset(o, 0, sizeof *o);
     o->isa = lanes_isa_current();
     o->scheme = LANES_SCHEME_WIDE;
-    o->accuracy = LANES_ACCURACY_DEFAULT;
+    o->accuracy = LANES_ACCURACY_FROM_SCENE;
     o->width = 0; /* the scene camera's size */
     o->height = 0;
     o->spp = 1;
@@ -66,7 +66,8 @@ void lanes_accel_free(lanes_accel *a)
 typedef struct {
     const lanes_scene *scene;
     const lanes_accel *accel;
-    const lanes_render_options *opt;
+    const lanes_render_options *opt; /* = &resolved */
+    lanes_render_options resolved;   /* the caller's, with the accuracy mode resolved */
     const lanes_kernels *k;
     float eps;          /* offset of secondary origins, scaled to the scene */
     lanes_rcp_mode rcp; /* of the accuracy mode */
@@ -239,9 +240,16 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
                  job.width, job.height, opt->spp, opt->max_depth, LANES_MAX_DEPTH);
         return false;
     }
-    job.eps = lanes_scene_epsilon(scene);
-    job.rcp = lanes_accuracy_precision(opt->accuracy).rcp;
+    if (opt->accuracy < LANES_ACCURACY_FROM_SCENE || opt->accuracy >= LANES_ACCURACY_COUNT) {
+        snprintf(err->message, sizeof err->message, "render: accuracy mode %d unknown", (int)opt->accuracy);
+        return false;
+    }
     lanes_scene_plan_make(scene, opt->accuracy, &job.plan);
+    job.resolved = *opt;
+    job.resolved.accuracy = job.plan.accuracy;
+    job.opt = &job.resolved;
+    job.eps = lanes_scene_epsilon(scene);
+    job.rcp = lanes_accuracy_precision(job.plan.accuracy).rcp;
 
     const lanes_camera *c = &scene->camera;
     job.cam_eye = v3_load(c->eye);
