@@ -1,6 +1,7 @@
 /* The scene container: growth, bounds, validation, placing meshes.
  *
  * Compiled for the x86-64 baseline. */
+#define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
 #include "build/scene.h"
 
 #include <math.h>
@@ -8,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 void lanes_error_set(lanes_error *err, const char *fmt, ...)
 {
@@ -90,6 +92,18 @@ static bool grow(void **array, size_t *cap, size_t need, size_t size)
     return true;
 }
 
+bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page <= 0) return true; /* unknown: let malloc decide */
+    double have = (double)pages * (double)page;
+    if (bytes <= have) return true;
+    const double gib = 1024.0 * 1024.0 * 1024.0;
+    lanes_error_set(err, "%s needs about %.1f GiB; this machine has %.1f GiB of memory", what, bytes / gib,
+                    have / gib);
+    return false;
+}
+
 bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
 {
     size_t n = scene->triangle_count;
@@ -101,6 +115,14 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
     size_t need = n + extra;
     if (need <= scene->triangle_capacity)
         return true;
+    /* A scene is loaded to be traced: refuse it while it is still small if
+     * its BVH will not fit, rather than after filling the machine. */
+    char what[80];
+    snprintf(what, sizeof what, "a scene of %zu triangles (to load and trace)", need);
+    if (!lanes_memory_fits(what,
+                           (double)need * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE),
+                           err))
+        return false;
     /* Both arrays share one capacity; grow a copy of it for each so a
      * failure halfway leaves triangle_capacity describing both. */
     size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;

@@ -82,6 +82,19 @@ typedef struct lanes_error {
  * a scene this large would need 72 GiB of vertices anyway. */
 #define LANES_SCENE_MAX_TRIANGLES ((size_t)1 << 31)
 
+/* Memory per triangle, for refusing absurd sizes before the kernel's OOM
+ * killer does (lanes_scene_reserve_triangles checks both, since a scene is
+ * loaded to be traced): a scene holds 9 floats and a material index;
+ * building its BVH2 and wide BVH peaks at about 185 bytes more (measured:
+ * `lanes render` of 13.1M triangles, 2.95 GB resident). */
+#define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
+#define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
+
+/* false, with "<what> needs about X GiB; this machine has Y GiB of memory",
+ * when bytes exceed the machine's physical memory: allocations that large
+ * may succeed (Linux overcommits) and end in the OOM killer instead. */
+bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
+
 /* Formats err->message like snprintf (truncated to fit). err may be NULL. */
 void lanes_error_set(lanes_error *err, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -159,6 +159,20 @@ static void test_container(void)
               strstr(err.message, "too many"),
           "over the limit refused: %s", err.message);
     CHECK(!lanes_scene_reserve_triangles(&s, SIZE_MAX, &err), "SIZE_MAX refused");
+    /* Under the count limit but beyond memory: refused before allocating. */
+    CHECK(lanes_memory_fits("one byte", 1.0, NULL), "one byte fits");
+    CHECK(!lanes_memory_fits("an exabyte", 1e18, &err) && strstr(err.message, "an exabyte needs about") &&
+              strstr(err.message, "GiB of memory"),
+          "an exabyte refused: %s", err.message);
+    size_t most = LANES_SCENE_MAX_TRIANGLES - s.triangle_count;
+    double most_bytes = (double)LANES_SCENE_MAX_TRIANGLES *
+                        (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    if (lanes_memory_fits("", most_bytes, NULL)) {
+        printf("skip: this machine holds %.0f GiB, enough for 2^31 triangles\n", most_bytes / 1073741824.0);
+    } else {
+        CHECK(!lanes_scene_reserve_triangles(&s, most, &err) && strstr(err.message, "to load and trace"),
+              "2^31 triangles on this machine refused for memory: %s", err.message);
+    }
     CHECK(s.triangle_capacity == cap && s.triangle_count == 100000, "unchanged after refusal");
     lanes_point_light pl = {{0, 5, 0}, {1, 1, 1}};
     CHECK(lanes_scene_add_point_light(&s, &pl, &err), "point light");
