@@ -728,6 +728,7 @@ static const bad_case bad_meshes[] = {
     {"meshes/bad/point_cloud.ply", {"line 7", "no faces"}},
     {"meshes/bad/not_off.off", {"line 2", "not an OFF file"}},
     {"meshes/bad/bad_header.ply", {"line 7", "proprety"}},
+    {"meshes/bad/duplicate_element.ply", {"line 9", "element 'face' declared twice"}},
     {"meshes/bad/garbage.dat", {"cannot import"}},
     {"meshes/bad/index_oob.gltf", {"Assimp kept 1"}},
     {"meshes/bad/nan.gltf", {"not finite"}},
