@@ -4,6 +4,7 @@
 #include "bench/cli_common.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -234,6 +235,14 @@ static size_t utf8_length(const unsigned char *s)
         (cp >= 0xd800 && cp <= 0xdfff))
         return 0;
     return n;
+}
+
+void cli_json_number(FILE *out, double x)
+{
+    if (isnan(x) || isinf(x))
+        fputs("null", out);
+    else
+        fprintf(out, "%.6g", x);
 }
 
 void cli_json_string(FILE *out, const char *s)

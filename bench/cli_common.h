@@ -101,6 +101,9 @@ cli_cpu_signature cli_cpu_signature_read(void);
 /* JSON string literal with quotes; invalid UTF-8 bytes become U+FFFD so the
  * document stays valid whatever the CPU's brand string holds. */
 void cli_json_string(FILE *out, const char *s);
+/* JSON number with 6 significant digits; null for NaN and infinities,
+ * which JSON cannot hold. */
+void cli_json_number(FILE *out, double x);
 /* CSV field, quoted only when it needs to be (RFC 4180). */
 void cli_csv_field(FILE *out, const char *s);
 

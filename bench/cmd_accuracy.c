@@ -158,14 +158,6 @@ static void write_histograms(const char *path, const row_list *rows)
     fclose(f);
 }
 
-static void json_number(FILE *f, double x)
-{
-    if (isnan(x) || isinf(x))
-        fputs("null", f);
-    else
-        fprintf(f, "%.6g", x);
-}
-
 static void write_json(FILE *f, const row_list *rows, const acc_plan *plan, const char *dir)
 {
     fprintf(f, "{\"cpu\": ");
@@ -179,27 +171,27 @@ static void write_json(FILE *f, const row_list *rows, const acc_plan *plan, cons
         cli_json_string(f, r->mesh);
         fprintf(f, ", \"translation\": %g, \"mode\": \"%s\", \"isa\": \"%s\", \"leaks_per_1e7\": ", r->translation,
                 lanes_accuracy_name(r->mode), lanes_isa_name(r->isa));
-        json_number(f, row_leaks(r));
+        cli_json_number(f, row_leaks(r));
         fprintf(f, ", \"aimed_leaks_per_1e7\": ");
-        json_number(f, row_aimed(r));
+        cli_json_number(f, row_aimed(r));
         fprintf(f, ", \"false_hits_per_1e7\": ");
-        json_number(f, row_false(r));
+        cli_json_number(f, row_false(r));
         fprintf(f, ", \"self_hits_per_1e7\": ");
-        json_number(f, row_self(r));
+        cli_json_number(f, row_self(r));
         fprintf(f, ", \"t_ulp_p50\": ");
-        json_number(f, acc_ulp_percentile(&r->c, 0.5));
+        cli_json_number(f, acc_ulp_percentile(&r->c, 0.5));
         fprintf(f, ", \"t_ulp_p99\": ");
-        json_number(f, acc_ulp_percentile(&r->c, 0.99));
+        cli_json_number(f, acc_ulp_percentile(&r->c, 0.99));
         fprintf(f, ", \"mrays\": ");
-        json_number(f, r->mrays);
+        cli_json_number(f, r->mrays);
         fprintf(f, ", \"rays\": %llu, \"leaks\": ", (unsigned long long)r->c.rays);
-        json_number(f, r->no_interior ? NAN : (double)r->c.leaks);
+        cli_json_number(f, r->no_interior ? NAN : (double)r->c.leaks);
         fprintf(f, ", \"aimed_rays\": %llu, \"aimed_leaks\": ", (unsigned long long)r->c.aimed_rays);
-        json_number(f, r->no_interior ? NAN : (double)r->c.aimed_leaks);
+        cli_json_number(f, r->no_interior ? NAN : (double)r->c.aimed_leaks);
         fprintf(f, ", \"miss_rays\": %llu, \"false_hits\": %llu, \"self_rays\": %llu, \"self_hits\": ",
                 (unsigned long long)r->c.miss_rays, (unsigned long long)r->c.false_hits,
                 (unsigned long long)r->c.self_rays);
-        json_number(f, r->no_interior ? NAN : (double)r->c.self_hits);
+        cli_json_number(f, r->no_interior ? NAN : (double)r->c.self_hits);
         fprintf(f, "}");
     }
     fprintf(f, "\n]}\n");

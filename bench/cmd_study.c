@@ -358,14 +358,6 @@ static void write_csv(const char *path, const row_list *rows)
     fclose(f);
 }
 
-static void json_number(FILE *f, double x)
-{
-    if (isnan(x) || isinf(x))
-        fputs("null", f);
-    else
-        fprintf(f, "%.6g", x);
-}
-
 static void write_json(FILE *f, const row_list *rows, const char *dir)
 {
     fprintf(f, "{\"folder\": ");
@@ -378,13 +370,13 @@ static void write_json(FILE *f, const row_list *rows, const char *dir)
         fprintf(f, ", \"rays\": \"%s\", \"scheme\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"queue\": \"%s\", "
                    "\"queue_min\": %d, \"packet\": %d, \"util_op\": ",
                 r->rays, r->scheme, r->isa, r->lanes, r->queue, r->queue_min, r->packet);
-        json_number(f, r->util_op);
+        cli_json_number(f, r->util_op);
         fprintf(f, ", \"util_packet\": ");
-        json_number(f, r->util_packet);
+        cli_json_number(f, r->util_packet);
         fprintf(f, ", \"seconds\": ");
-        json_number(f, r->seconds);
+        cli_json_number(f, r->seconds);
         fprintf(f, ", \"mrays\": ");
-        json_number(f, r->mrays);
+        cli_json_number(f, r->mrays);
         fprintf(f, "}");
     }
     fprintf(f, "\n]}\n");
