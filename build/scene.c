@@ -1,15 +1,15 @@
 /* The scene container: growth, bounds, validation, placing meshes.
  *
  * Compiled for the x86-64 baseline. */
-#define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
 #include "build/scene.h"
+
+#include "build/memory_limit.h"
 
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 void lanes_error_set(lanes_error *err, const char *fmt, ...)
 {
@@ -92,16 +92,49 @@ static bool grow(void **array, size_t *cap, size_t need, size_t size)
     return true;
 }
 
+/* "29.2 GiB", "9.4 MiB": one decimal in the largest unit that keeps a
+ * leading digit. */
+static const char *size_text(char *buf, size_t size, double bytes)
+{
+    static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+    int u = 0;
+    while (bytes >= 1024.0 && u < 6) bytes /= 1024.0, u++;
+    snprintf(buf, size, u ? "%.1f %s" : "%.0f %s", bytes, units[u]);
+    return buf;
+}
+
 bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
 {
-    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    if (pages <= 0 || page <= 0) return true; /* unknown: let malloc decide */
-    double have = (double)pages * (double)page;
-    if (bytes <= have) return true;
-    const double gib = 1024.0 * 1024.0 * 1024.0;
-    lanes_error_set(err, "%s needs about %.1f GiB; this machine has %.1f GiB of memory", what, bytes / gib,
-                    have / gib);
+    lanes_memory_limit limit = lanes_memory_limit_read();
+    if (limit.bad_env) {
+        lanes_error_set(err, "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
+                        limit.bad_env);
+        return false;
+    }
+    if (bytes <= limit.bytes) return true;
+    static const char *const has[] = {
+        [LANES_MEMORY_PHYSICAL] = "this machine has",
+        [LANES_MEMORY_CGROUP] = "this process's cgroup allows it",
+        [LANES_MEMORY_ENV] = "LANES_MEMORY_LIMIT allows",
+    };
+    char need[32], have[32];
+    lanes_error_set(err, "%s needs about %s; %s %s of memory", what, size_text(need, sizeof need, bytes),
+                    has[limit.source], size_text(have, sizeof have, limit.bytes));
     return false;
+}
+
+/* A scene is loaded to be traced: what it and its BVHs will need. */
+static bool traced_scene_fits(size_t triangles, lanes_error *err)
+{
+    char what[80];
+    snprintf(what, sizeof what, "a scene of %zu triangles (to load and trace)", triangles);
+    return lanes_memory_fits(
+        what, (double)triangles * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE), err);
+}
+
+bool lanes_scene_check_memory(const lanes_scene *scene, lanes_error *err)
+{
+    return traced_scene_fits(scene->triangle_count, err);
 }
 
 bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
@@ -115,14 +148,11 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
     size_t need = n + extra;
     if (need <= scene->triangle_capacity)
         return true;
-    /* A scene is loaded to be traced: refuse it while it is still small if
-     * its BVH will not fit, rather than after filling the machine. */
-    char what[80];
-    snprintf(what, sizeof what, "a scene of %zu triangles (to load and trace)", need);
-    if (!lanes_memory_fits(what,
-                           (double)need * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE),
-                           err))
-        return false;
+    /* Refuse a scene while it is still small if its BVH will not fit,
+     * rather than after filling the machine. Checked only here, when the
+     * arrays grow (they double): lanes_scene_check_memory checks the final
+     * count. */
+    if (!traced_scene_fits(need, err)) return false;
     /* Both arrays share one capacity; grow a copy of it for each so a
      * failure halfway leaves triangle_capacity describing both. */
     size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;

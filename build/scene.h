@@ -90,10 +90,18 @@ typedef struct lanes_error {
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
 #define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
 
-/* false, with "<what> needs about X GiB; this machine has Y GiB of memory",
- * when bytes exceed the machine's physical memory: allocations that large
- * may succeed (Linux overcommits) and end in the OOM killer instead. */
+/* false, with "<what> needs about X GiB; this machine has Y GiB of memory"
+ * (or what limits it instead: a cgroup, LANES_MEMORY_LIMIT), when bytes
+ * exceed what lanes_memory_limit_read (build/memory_limit.h) says this
+ * process may use: allocations that large may succeed (Linux overcommits)
+ * and end in the OOM killer instead. Also false, with a message, when
+ * LANES_MEMORY_LIMIT is set to something that is not a size. */
 bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
+
+/* Whether a scene of this many triangles, and the BVHs built to trace it,
+ * fit in memory (lanes_memory_fits). lanes_scene_reserve_triangles checks
+ * as the scene grows; lanes_scene_load checks the final count too. */
+bool lanes_scene_check_memory(const lanes_scene *scene, lanes_error *err);
 
 /* Formats err->message like snprintf (truncated to fit). err may be NULL. */
 void lanes_error_set(lanes_error *err, const char *fmt, ...)

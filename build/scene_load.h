@@ -18,7 +18,9 @@
  *                          diffuse grey under one point light with a camera
  *                          framing it.
  * *out is initialized by the call; on failure it is empty and err says
- * which file, which line where there is one, and what is wrong. */
+ * which file, which line where there is one, and what is wrong, including
+ * a scene too large to trace in the memory this process may use
+ * (lanes_scene_check_memory). */
 bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err);
 
 #endif

@@ -21,8 +21,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
+#include "build/memory_limit.h"
 #include "build/mesh_import.h"
 #include "build/scene.h"
 #include "build/scene_file.h"
@@ -162,7 +164,7 @@ static void test_container(void)
     /* Under the count limit but beyond memory: refused before allocating. */
     CHECK(lanes_memory_fits("one byte", 1.0, NULL), "one byte fits");
     CHECK(!lanes_memory_fits("an exabyte", 1e18, &err) && strstr(err.message, "an exabyte needs about") &&
-              strstr(err.message, "GiB of memory"),
+              strstr(err.message, "of memory"),
           "an exabyte refused: %s", err.message);
     size_t most = LANES_SCENE_MAX_TRIANGLES - s.triangle_count;
     double most_bytes = (double)LANES_SCENE_MAX_TRIANGLES *
@@ -208,6 +210,130 @@ static void test_container(void)
     lanes_xform_trs(&x, t, &r, sc); /* scale, then rotate, then translate */
     lanes_xform_apply(&x, in, out);
     CHECK(near3(out, 1, 2, 1, 1e-6), "trs: %g %g %g", out[0], out[1], out[2]);
+}
+
+/* ---- the memory limit ---- */
+
+static void put_text(const char *dir, const char *name, const char *text)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    write_file(path, text, strlen(text));
+}
+
+static void make_dirs(const char *root, const char *rel)
+{
+    char path[1024];
+    int n = snprintf(path, sizeof path, "%s/%s", root, rel);
+    for (int i = 1; i <= n; i++)
+        if (path[i] == '/' || path[i] == '\0') {
+            char c = path[i];
+            path[i] = '\0';
+            mkdir(path, 0755);
+            path[i] = c;
+        }
+}
+
+/* A cgroup tree of our own: the limits are read from the cgroup and every
+ * ancestor, v2 and v1, and the smallest of them and physical memory wins. */
+static void test_memory_limit(void)
+{
+    const double gib = 1073741824.0, physical = 16 * gib;
+    char root[512], proc[512], sub[768];
+    snprintf(root, sizeof root, "%s/cgroup", g_scratch);
+    snprintf(proc, sizeof proc, "%s/proc_self_cgroup", g_scratch);
+    make_dirs(root, "v2/outer/inner");
+    make_dirs(root, "v1/memory/job/step");
+    make_dirs(root, "v1/cpu,cpuacct/job");
+
+    /* v2: the parent's 1 GiB binds the unlimited child */
+    put_text(g_scratch, "proc_self_cgroup", "0::/outer/inner\n");
+    snprintf(sub, sizeof sub, "%s/v2", root);
+    put_text(sub, "outer/inner/memory.max", "max\n");
+    put_text(sub, "outer/memory.max", "1073741824\n");
+    lanes_memory_limit l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == gib && l.source == LANES_MEMORY_CGROUP, "v2 parent limit: %.0f bytes", l.bytes);
+    put_text(sub, "outer/memory.max", "max\n");
+    l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 unlimited: physical memory, have %.0f", l.bytes);
+    put_text(sub, "outer/memory.max", "68719476736\n"); /* 64 GiB: above physical memory */
+    l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 limit above physical memory: have %.0f", l.bytes);
+    put_text(sub, "outer/memory.max", "12abc\n");
+    l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == physical, "v2 unreadable limit ignored: have %.0f", l.bytes);
+
+    /* v1: only the memory hierarchy counts; its "unlimited" is a huge count */
+    put_text(g_scratch, "proc_self_cgroup", "5:cpu,cpuacct:/job\n4:memory:/job/step\n0::/\n");
+    snprintf(sub, sizeof sub, "%s/v1", root);
+    put_text(sub, "cpu,cpuacct/job/memory.limit_in_bytes", "1024\n");
+    put_text(sub, "memory/memory.limit_in_bytes", "9223372036854771712\n");
+    put_text(sub, "memory/job/memory.limit_in_bytes", "9223372036854771712\n");
+    put_text(sub, "memory/job/step/memory.limit_in_bytes", "2147483648\n");
+    l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == 2 * gib && l.source == LANES_MEMORY_CGROUP, "v1 limit: %.0f bytes", l.bytes);
+
+    /* no cgroup files at all: physical memory */
+    snprintf(sub, sizeof sub, "%s/none", root);
+    l = lanes_memory_limit_from(proc, sub, physical);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "no cgroup files: have %.0f", l.bytes);
+    snprintf(sub, sizeof sub, "%s/no_such_file", g_scratch);
+    l = lanes_memory_limit_from(sub, root, physical);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "no /proc/self/cgroup: have %.0f", l.bytes);
+
+    /* LANES_MEMORY_LIMIT */
+    static const struct {
+        const char *text;
+        double bytes; /* 0: refused */
+    } sizes[] = {{"1024", 1024.0}, {"4G", 4 * gib}, {"1.5m", 1.5 * 1048576.0}, {"640k", 655360.0},
+                 {"", 0}, {"-1", 0}, {"0", 0}, {"12x", 0}, {"G", 0}, {"4GB", 0}, {"nan", 0}, {"1e999", 0}};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++) {
+        double bytes = 0;
+        bool ok = lanes_memory_size_parse(sizes[i].text, &bytes);
+        CHECK(ok == (sizes[i].bytes > 0) && (!ok || bytes == sizes[i].bytes), "size '%s': %s %.0f", sizes[i].text,
+              ok ? "read as" : "refused", bytes);
+    }
+
+    /* A scene is checked at its final size, not only when its arrays grow:
+     * three icospheres of 81,920 triangles grow the arrays to 131,072 and
+     * then 262,144 slots, so the last check while loading sees 163,840
+     * triangles, and only the final check sees 245,760. */
+    const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    char limit[32], two[512], three[512];
+    snprintf(limit, sizeof limit, "%.0f", 200000.0 * per_triangle);
+    snprintf(two, sizeof two, "%s/two_spheres.json", g_scratch);
+    snprintf(three, sizeof three, "%s/three_spheres.json", g_scratch);
+    const char *head = "{\"materials\": {\"m\": {\"type\": \"diffuse\", \"color\": 0.5}}, \"objects\": [";
+    const char *sphere = "{\"builtin\": \"sphere\", \"detail\": 6, \"material\": \"m\"}";
+    char text[512];
+    snprintf(text, sizeof text, "%s%s, %s]}", head, sphere, sphere);
+    write_file(two, text, strlen(text));
+    snprintf(text, sizeof text, "%s%s, %s, %s]}", head, sphere, sphere, sphere);
+    write_file(three, text, strlen(text));
+    setenv("LANES_MEMORY_LIMIT", limit, 1);
+    lanes_scene s;
+    lanes_error err;
+    bool loaded = lanes_scene_load(two, &s, &err);
+    CHECK(loaded && s.triangle_count == 163840, "two spheres under LANES_MEMORY_LIMIT=%s: %s", limit,
+          loaded ? "loaded" : err.message);
+    if (loaded) lanes_scene_free(&s);
+    loaded = lanes_scene_load(three, &s, &err);
+    CHECK(!loaded && strstr(err.message, "three_spheres.json") && strstr(err.message, "245760 triangles") &&
+              strstr(err.message, "LANES_MEMORY_LIMIT allows"),
+          "three spheres over LANES_MEMORY_LIMIT=%s: %s", limit, loaded ? "loaded" : err.message);
+    if (loaded) lanes_scene_free(&s);
+    setenv("LANES_MEMORY_LIMIT", "lots", 1);
+    loaded = lanes_scene_load(two, &s, &err);
+    CHECK(!loaded && strstr(err.message, "LANES_MEMORY_LIMIT 'lots' is not a size"), "LANES_MEMORY_LIMIT=lots: %s",
+          loaded ? "loaded" : err.message);
+    if (loaded) lanes_scene_free(&s);
+    unsetenv("LANES_MEMORY_LIMIT");
+
+    /* this process: something positive */
+    l = lanes_memory_limit_read();
+    printf("this process may use %.1f GiB (%s)\n", l.bytes / gib,
+           l.source == LANES_MEMORY_CGROUP ? "cgroup limit" : "physical memory");
+    CHECK(l.bytes > 0, "this process's memory limit: %.0f", l.bytes);
 }
 
 /* ---- mesh import ---- */
@@ -861,6 +987,7 @@ int main(int argc, char **argv)
         test_corpus();
     } else {
         test_container();
+        test_memory_limit();
         test_mesh_formats();
         test_generators();
         test_scene_files();
