@@ -255,10 +255,11 @@ static void test_memory_limit(void)
     CHECK(l.bytes == gib && l.source == LANES_MEMORY_CGROUP, "v2 parent limit: %.0f bytes", l.bytes);
     put_text(sub, "outer/memory.max", "max\n");
     l = lanes_memory_limit_from(proc, sub, physical);
-    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 unlimited: physical memory, have %.0f", l.bytes);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 unlimited: have %.0f", l.bytes);
     put_text(sub, "outer/memory.max", "68719476736\n"); /* 64 GiB: above physical memory */
     l = lanes_memory_limit_from(proc, sub, physical);
-    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 limit above physical memory: have %.0f", l.bytes);
+    CHECK(l.bytes == physical && l.source == LANES_MEMORY_PHYSICAL, "v2 limit above physical: have %.0f",
+          l.bytes);
     put_text(sub, "outer/memory.max", "12abc\n");
     l = lanes_memory_limit_from(proc, sub, physical);
     CHECK(l.bytes == physical, "v2 unreadable limit ignored: have %.0f", l.bytes);
