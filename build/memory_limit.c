@@ -77,12 +77,11 @@ lanes_memory_limit lanes_memory_limit_from(const char *proc_cgroup, const char *
         if (!c2) continue;
         const char *controllers = c1 + 1, *path = c2 + 1;
         size_t nc = (size_t)(c2 - controllers);
-        char dir[4096];
         double cg = INFINITY;
         if (nc == 0 && strncmp(line, "0:", 2) == 0) { /* v2: one unified hierarchy */
-            if (snprintf(dir, sizeof dir, "%s", cgroup_root) < (int)sizeof dir)
-                cg = smallest_limit_up(dir, path, "memory.max");
+            cg = smallest_limit_up(cgroup_root, path, "memory.max");
         } else if (lists_memory(controllers, nc)) { /* v1: mounted under its controller list */
+            char dir[4096];
             if (snprintf(dir, sizeof dir, "%s/%.*s", cgroup_root, (int)nc, controllers) < (int)sizeof dir)
                 cg = smallest_limit_up(dir, path, "memory.limit_in_bytes");
         }

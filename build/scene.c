@@ -103,15 +103,14 @@ static const char *size_text(char *buf, size_t size, double bytes)
     return buf;
 }
 
-bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
+/* Why `what` (needing `bytes`) cannot have the memory `limit` allows. */
+static void refuse(const lanes_memory_limit *limit, const char *what, double bytes, lanes_error *err)
 {
-    lanes_memory_limit limit = lanes_memory_limit_read();
-    if (limit.bad_env) {
+    if (limit->bad_env) {
         lanes_error_set(err, "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
-                        limit.bad_env);
-        return false;
+                        limit->bad_env);
+        return;
     }
-    if (bytes <= limit.bytes) return true;
     static const char *const has[] = {
         [LANES_MEMORY_PHYSICAL] = "this machine has",
         [LANES_MEMORY_CGROUP] = "this process's cgroup allows it",
@@ -119,22 +118,31 @@ bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
     };
     char need[32], have[32];
     lanes_error_set(err, "%s needs about %s; %s %s of memory", what, size_text(need, sizeof need, bytes),
-                    has[limit.source], size_text(have, sizeof have, limit.bytes));
+                    has[limit->source], size_text(have, sizeof have, limit->bytes));
+}
+
+bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
+{
+    lanes_memory_limit limit = lanes_memory_limit_read();
+    if (!limit.bad_env && bytes <= limit.bytes) return true;
+    refuse(&limit, what, bytes, err);
     return false;
 }
 
-/* A scene is loaded to be traced: what it and its BVHs will need. */
-static bool traced_scene_fits(size_t triangles, lanes_error *err)
+/* A scene is loaded to be traced: whether it and its BVHs fit at this count. */
+static bool traced_scene_fits(lanes_scene *scene, size_t triangles, lanes_error *err)
 {
+    if (triangles <= scene->triangles_that_fit) return true;
+    const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    lanes_memory_limit limit = lanes_memory_limit_read();
+    if (!limit.bad_env)
+        scene->triangles_that_fit =
+            (size_t)fmin(floor(limit.bytes / per_triangle), (double)LANES_SCENE_MAX_TRIANGLES);
+    if (triangles <= scene->triangles_that_fit) return true;
     char what[80];
     snprintf(what, sizeof what, "a scene of %zu triangles (to load and trace)", triangles);
-    return lanes_memory_fits(
-        what, (double)triangles * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE), err);
-}
-
-bool lanes_scene_check_memory(const lanes_scene *scene, lanes_error *err)
-{
-    return traced_scene_fits(scene->triangle_count, err);
+    refuse(&limit, what, (double)triangles * per_triangle, err);
+    return false;
 }
 
 bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
@@ -146,13 +154,12 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
         return false;
     }
     size_t need = n + extra;
+    /* Refuse a scene while it is still small if its BVHs will not fit,
+     * rather than after filling the machine; at every count, not only when
+     * the arrays grow, since they grow by doubling. */
+    if (!traced_scene_fits(scene, need, err)) return false;
     if (need <= scene->triangle_capacity)
         return true;
-    /* Refuse a scene while it is still small if its BVH will not fit,
-     * rather than after filling the machine. Checked only here, when the
-     * arrays grow (they double): lanes_scene_check_memory checks the final
-     * count. */
-    if (!traced_scene_fits(need, err)) return false;
     /* Both arrays share one capacity; grow a copy of it for each so a
      * failure halfway leaves triangle_capacity describing both. */
     size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;

@@ -71,6 +71,10 @@ typedef struct lanes_scene {
     size_t material_capacity;
     size_t point_light_capacity;
     size_t area_light_capacity;
+    /* The most triangles that fit in memory with their BVHs, read at the
+     * first lanes_scene_reserve_triangles (0: not read yet), so that
+     * appending one triangle at a time does not read the limit each time. */
+    size_t triangles_that_fit;
 } lanes_scene;
 
 /* Errors from loaders: which file, which line (0: none), what is wrong. */
@@ -83,8 +87,8 @@ typedef struct lanes_error {
 #define LANES_SCENE_MAX_TRIANGLES ((size_t)1 << 31)
 
 /* Memory per triangle, for refusing absurd sizes before the kernel's OOM
- * killer does (lanes_scene_reserve_triangles checks both, since a scene is
- * loaded to be traced): a scene holds 9 floats and a material index;
+ * killer does (lanes_scene_reserve_triangles checks both, at every count,
+ * since a scene is loaded to be traced): a scene holds 9 floats and a material index;
  * building its BVH2 and wide BVH peaks at about 185 bytes more (measured:
  * `lanes render` of 13.1M triangles, 2.95 GB resident). */
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
@@ -98,10 +102,6 @@ typedef struct lanes_error {
  * LANES_MEMORY_LIMIT is set to something that is not a size. */
 bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
 
-/* Whether a scene of this many triangles, and the BVHs built to trace it,
- * fit in memory (lanes_memory_fits). lanes_scene_reserve_triangles checks
- * as the scene grows; lanes_scene_load checks the final count too. */
-bool lanes_scene_check_memory(const lanes_scene *scene, lanes_error *err);
 
 /* Formats err->message like snprintf (truncated to fit). err may be NULL. */
 void lanes_error_set(lanes_error *err, const char *fmt, ...)

@@ -77,7 +77,7 @@ static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
     return true;
 }
 
-static bool load_any(const char *spec, lanes_scene *out, lanes_error *err)
+bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
 {
     if (!spec || !*spec)
         return lanes_builtin_scene("default", out, err);
@@ -96,19 +96,4 @@ static bool load_any(const char *spec, lanes_scene *out, lanes_error *err)
         return false;
     }
     return mesh_scene(spec, out, err);
-}
-
-bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
-{
-    if (!load_any(spec, out, err)) return false;
-    /* Loading checked memory each time the scene's arrays grew, but they
-     * grow by doubling: the final count may be nearly twice the last one
-     * checked, and the BVHs are still to come. */
-    lanes_error why;
-    if (!lanes_scene_check_memory(out, &why)) {
-        lanes_error_set(err, "%s: %s", spec && *spec ? spec : "default", why.message);
-        lanes_scene_free(out);
-        return false;
-    }
-    return true;
 }

@@ -20,7 +20,7 @@
  * *out is initialized by the call; on failure it is empty and err says
  * which file, which line where there is one, and what is wrong, including
  * a scene too large to trace in the memory this process may use
- * (lanes_scene_check_memory). */
+ * (lanes_scene_reserve_triangles). */
 bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err);
 
 #endif

@@ -295,10 +295,10 @@ static void test_memory_limit(void)
               ok ? "read as" : "refused", bytes);
     }
 
-    /* A scene is checked at its final size, not only when its arrays grow:
+    /* A scene is checked at every count, not only when its arrays grow:
      * three icospheres of 81,920 triangles grow the arrays to 131,072 and
-     * then 262,144 slots, so the last check while loading sees 163,840
-     * triangles, and only the final check sees 245,760. */
+     * then 262,144 slots, so the third sphere needs no growth, and only a
+     * check at every count sees 245,760 triangles. */
     const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
     char limit[32], two[512], three[512];
     snprintf(limit, sizeof limit, "%.0f", 200000.0 * per_triangle);

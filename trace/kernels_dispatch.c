@@ -3,11 +3,12 @@
  * helpers for the kernels' data (allocation, scalar ray set-up). */
 #include "trace/kernels.h"
 
+#include "simd/vec1_scalar.h" /* baseline: SSE is part of x86-64 */
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <xmmintrin.h> /* SSE is part of the x86-64 baseline */
 
 #define DECLARE(suffix) extern const lanes_kernels lanes_kernels_##suffix;
 #ifdef LANES_HAVE_KSET_SCALAR
@@ -57,12 +58,14 @@ const lanes_kernels *lanes_kernels_for(lanes_isa isa)
 
 const lanes_kernels *lanes_kernels_current(void) { return tables[lanes_isa_current()]; }
 
-/* The SSE estimate (12 bits) plus one Newton step, as the kernels' fast mode
- * computes it; tiny components take the exact 1/d, as there (ray_kernels.c). */
+/* The SSE estimate (12 bits) plus one Newton step; tiny components take the
+ * exact 1/d, as in the kernels' fast mode (ray_kernels.c). The step is
+ * written r (2 - d r) here and r + r (1 - d r) in the SIMD layer
+ * (v1f_rcp_nr), so the two can differ in the last bit. */
 static float fast_rcp(float d)
 {
     if (fabsf(d) < 0x1p-60f) return 1.0f / d;
-    float r = _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(d)));
+    float r = v1f_rcp_fast(d);
     return r * (2.0f - d * r);
 }
 
