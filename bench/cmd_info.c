@@ -21,13 +21,6 @@ typedef struct {
     char reason[160];
 } info;
 
-/* Names of the features a set needs and the CPU (after the switch) lacks. */
-static void missing_features(lanes_isa isa, const lanes_cpu_features *cpu, char *buf, size_t size)
-{
-    uint32_t missing = lanes_isa_required_features(isa) & ~cpu->bits;
-    lanes_cpu_feature_list(missing, buf, size);
-}
-
 static void print_text(const info *in)
 {
     char buf[512];
@@ -39,6 +32,11 @@ static void print_text(const info *in)
            in->sig.stepping);
     lanes_cpu_feature_list(cpu->bits, buf, sizeof buf);
     printf("features:     %s\n", buf[0] ? buf : "(none)");
+    uint32_t not_enabled = cpu->cpuid_bits & ~cpu->raw_bits;
+    if (not_enabled) {
+        lanes_cpu_feature_list(not_enabled, buf, sizeof buf);
+        printf("os-disabled:  %s (in cpuid, but the OS has not enabled their state)\n", buf);
+    }
     if (in->disabled) {
         lanes_cpu_feature_list(in->disabled, buf, sizeof buf);
         printf("disabled:     %s (by LANES_DISABLE_CPU_FEATURES)\n", buf);
@@ -85,8 +83,8 @@ static void print_text(const info *in)
                    lanes_isa_name(isa));
             continue;
         }
-        missing_features(isa, cpu, buf, sizeof buf);
-        printf("cannot run:   %s (lacks %s)\n", lanes_isa_name(isa), buf);
+        lanes_cpu_explain_missing(cpu, lanes_isa_required_features(isa), buf, sizeof buf);
+        printf("cannot run:   %s (%s)\n", lanes_isa_name(isa), buf);
     }
     printf("selected:     %s (%d lane%s; %s)\n", lanes_isa_name(in->selected),
            lanes_isa_lanes(in->selected), lanes_isa_lanes(in->selected) == 1 ? "" : "s",
@@ -133,6 +131,8 @@ static void print_json(const info *in)
     json_feature_array(cpu->bits);
     printf(",\n  \"features_detected\": ");
     json_feature_array(cpu->raw_bits);
+    printf(",\n  \"features_cpuid\": ");
+    json_feature_array(cpu->cpuid_bits);
     printf(",\n  \"disabled_features\": ");
     json_feature_array(in->disabled);
     /* A string: a 64-bit mask does not survive JSON readers that use doubles. */

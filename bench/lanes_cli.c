@@ -96,11 +96,13 @@ int main(int argc, char **argv)
     /* A bad LANES_ISA or LANES_MAX_ISA is the user's error: say so rather
      * than run with a set they did not ask for. --isa takes precedence over
      * the environment, so with --isa the environment's error does not stop
-     * the run (the set --isa names is checked when it is applied). */
+     * the run (the set --isa names is checked when it is applied); a bad
+     * LANES_DISABLE_CPU_FEATURES does, since --isa does not replace it. */
     bool isa_flag = false;
     for (int i = 1; i < argc; i++)
         if (strcmp(argv[i], "--isa") == 0 || strncmp(argv[i], "--isa=", 6) == 0) isa_flag = true;
-    if (lanes_isa_init(message, sizeof message) != LANES_OK && !isa_flag) cli_fail("%s", message);
+    lanes_status st = lanes_isa_init(message, sizeof message);
+    if (st != LANES_OK && (!isa_flag || st == LANES_ERR_BAD_INPUT)) cli_fail("%s", message);
 
     return cli_dispatch(&ctx, &root, argc - 1, argv + 1);
 }

@@ -6,6 +6,7 @@
 
 #include <cpuid.h>
 #include <pthread.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,22 +45,81 @@ static uint64_t read_xcr0(void)
     return ((uint64_t)hi << 32) | lo;
 }
 
-static uint32_t feature_bits_from_names(const char *list)
+/* The names in a LANES_DISABLE_CPU_FEATURES list as bits; the first name
+ * that is no feature goes to `unknown` (a typo must not pass for a test of a
+ * CPU without that feature). */
+static uint32_t feature_bits_from_names(const char *list, char *unknown, size_t unknown_size)
 {
     uint32_t bits = 0;
-    char name[32];
     while (list && *list) {
         size_t n = strcspn(list, ", ");
-        if (n > 0 && n < sizeof name) {
-            memcpy(name, list, n);
-            name[n] = '\0';
+        if (n > 0) {
+            bool known = false;
             for (int i = 0; i < LANES_CPU_FEATURE_COUNT; i++)
-                if (strcmp(name, feature_names[i]) == 0) bits |= 1u << i;
+                if (strlen(feature_names[i]) == n && strncmp(list, feature_names[i], n) == 0) {
+                    bits |= 1u << i;
+                    known = true;
+                }
+            if (!known && !unknown[0]) snprintf(unknown, unknown_size, "%.*s", (int)n, list);
         }
         list += n;
         list += strspn(list, ", ");
     }
     return bits;
+}
+
+const char *lanes_cpu_all_feature_names(void)
+{
+    return "sse2, sse3, ssse3, sse4.1, sse4.2, popcnt, osxsave, avx, f16c, fma, avx2, bmi1, bmi2, "
+           "lzcnt, avx512f, avx512cd, avx512dq, avx512bw, avx512vl";
+}
+
+#define YMM_FEATURES (LANES_CPU_AVX | LANES_CPU_F16C | LANES_CPU_FMA | LANES_CPU_AVX2)
+#define ZMM_FEATURES                                                                        \
+    (LANES_CPU_AVX512F | LANES_CPU_AVX512CD | LANES_CPU_AVX512DQ | LANES_CPU_AVX512BW |      \
+     LANES_CPU_AVX512VL)
+
+static void append_names(char *buf, size_t size, uint32_t bits)
+{
+    size_t used = strlen(buf);
+    for (int i = 0; i < LANES_CPU_FEATURE_COUNT && used + 1 < size; i++) {
+        if (!(bits & (1u << i))) continue;
+        int n = snprintf(buf + used, size - used, "%s%s", (bits & ((1u << i) - 1)) ? ", " : "",
+                         feature_names[i]);
+        if (n < 0) break;
+        used += (size_t)n < size - used ? (size_t)n : size - used - 1;
+    }
+}
+
+bool lanes_cpu_explain_missing(const lanes_cpu_features *cpu, uint32_t needs, char *why,
+                               size_t size)
+{
+    uint32_t lacked = needs & ~cpu->cpuid_bits;
+    uint32_t not_enabled = needs & cpu->cpuid_bits & ~cpu->raw_bits;
+    uint32_t switched_off = needs & cpu->raw_bits & ~cpu->bits;
+    if (!size) return lacked | not_enabled | switched_off;
+    why[0] = '\0';
+    if (lacked) {
+        snprintf(why, size, "this CPU lacks ");
+        append_names(why, size, lacked);
+    } else if (not_enabled) {
+        /* The processor has the features; the OS does not save their state. */
+        char state[96];
+        if (not_enabled & LANES_CPU_OSXSAVE)
+            snprintf(state, sizeof state, "no XSAVE: CPUID.OSXSAVE is 0");
+        else
+            snprintf(state, sizeof state, "their %s register state is off: XCR0 = 0x%llx",
+                     (not_enabled & YMM_FEATURES) ? "YMM" : "ZMM and opmask",
+                     (unsigned long long)cpu->xcr0);
+        snprintf(why, size, "the OS has not enabled ");
+        append_names(why, size, not_enabled);
+        size_t used = strlen(why);
+        snprintf(why + used, size - used, " (%s)", state);
+    } else if (switched_off) {
+        snprintf(why, size, "LANES_DISABLE_CPU_FEATURES switches off ");
+        append_names(why, size, switched_off);
+    }
+    return why[0] != '\0';
 }
 
 static void detect(lanes_cpu_features *f)
@@ -80,9 +140,11 @@ static void detect(lanes_cpu_features *f)
             __get_cpuid(0x80000002u + leaf, &brand[4 * leaf], &brand[4 * leaf + 1],
                         &brand[4 * leaf + 2], &brand[4 * leaf + 3]);
         f->brand[48] = '\0';
-        /* brand strings are padded with leading spaces on some CPUs */
+        /* brand strings are padded with spaces on some CPUs, before or after */
         size_t lead = strspn(f->brand, " ");
         memmove(f->brand, f->brand + lead, strlen(f->brand + lead) + 1);
+        size_t len = strlen(f->brand);
+        while (len > 0 && f->brand[len - 1] == ' ') f->brand[--len] = '\0';
     }
 
     uint32_t leaf1_ecx = 0, leaf1_edx = 0, leaf7_ebx = 0, ext_ecx = 0;
@@ -106,31 +168,32 @@ static void detect(lanes_cpu_features *f)
     if (ext_ecx & (1u << 5)) bits |= LANES_CPU_LZCNT;
     if (leaf7_ebx & (1u << 3)) bits |= LANES_CPU_BMI1;
     if (leaf7_ebx & (1u << 8)) bits |= LANES_CPU_BMI2;
+    /* The processor's own view: XSAVE (bit 26) stands for osxsave here. */
+    if (leaf1_ecx & (1u << 26)) bits |= LANES_CPU_OSXSAVE;
+    if (leaf1_ecx & (1u << 28)) bits |= LANES_CPU_AVX;
+    if (leaf1_ecx & (1u << 29)) bits |= LANES_CPU_F16C;
+    if (leaf1_ecx & (1u << 12)) bits |= LANES_CPU_FMA;
+    if (leaf7_ebx & (1u << 5)) bits |= LANES_CPU_AVX2;
+    if (leaf7_ebx & (1u << 16)) bits |= LANES_CPU_AVX512F;
+    if (leaf7_ebx & (1u << 17)) bits |= LANES_CPU_AVX512DQ;
+    if (leaf7_ebx & (1u << 28)) bits |= LANES_CPU_AVX512CD;
+    if (leaf7_ebx & (1u << 30)) bits |= LANES_CPU_AVX512BW;
+    if (leaf7_ebx & (1u << 31)) bits |= LANES_CPU_AVX512VL;
+    f->cpuid_bits = bits;
 
-    /* Everything that uses YMM or ZMM registers also needs the OS's consent. */
+    /* Everything that uses YMM or ZMM registers also needs the OS's consent:
+     * OSXSAVE (bit 27) says the OS set CR4.OSXSAVE, so xgetbv is usable. */
     bool xsave = (leaf1_ecx & (1u << 26)) && (leaf1_ecx & (1u << 27));
-    if (xsave) {
-        bits |= LANES_CPU_OSXSAVE;
-        f->xcr0 = read_xcr0();
-    }
-    bool os_ymm = xsave && (f->xcr0 & 0x6) == 0x6;          /* XMM and YMM state */
-    bool os_zmm = os_ymm && (f->xcr0 & 0xe0) == 0xe0;       /* opmask, ZMM0-15 high, ZMM16-31 */
-    if (os_ymm) {
-        if (leaf1_ecx & (1u << 28)) bits |= LANES_CPU_AVX;
-        if (leaf1_ecx & (1u << 29)) bits |= LANES_CPU_F16C;
-        if (leaf1_ecx & (1u << 12)) bits |= LANES_CPU_FMA;
-        if (leaf7_ebx & (1u << 5)) bits |= LANES_CPU_AVX2;
-    }
-    if (os_zmm) {
-        if (leaf7_ebx & (1u << 16)) bits |= LANES_CPU_AVX512F;
-        if (leaf7_ebx & (1u << 17)) bits |= LANES_CPU_AVX512DQ;
-        if (leaf7_ebx & (1u << 28)) bits |= LANES_CPU_AVX512CD;
-        if (leaf7_ebx & (1u << 30)) bits |= LANES_CPU_AVX512BW;
-        if (leaf7_ebx & (1u << 31)) bits |= LANES_CPU_AVX512VL;
-    }
+    if (xsave) f->xcr0 = read_xcr0();
+    bool os_ymm = xsave && (f->xcr0 & 0x6) == 0x6;    /* XMM and YMM state */
+    bool os_zmm = os_ymm && (f->xcr0 & 0xe0) == 0xe0; /* opmask, ZMM0-15 high, ZMM16-31 */
+    if (!xsave) bits &= ~LANES_CPU_OSXSAVE;
+    if (!os_ymm) bits &= ~(uint32_t)YMM_FEATURES;
+    if (!os_zmm) bits &= ~(uint32_t)ZMM_FEATURES;
 
     f->raw_bits = bits;
-    f->bits = bits & ~feature_bits_from_names(getenv("LANES_DISABLE_CPU_FEATURES"));
+    f->bits = bits & ~feature_bits_from_names(getenv("LANES_DISABLE_CPU_FEATURES"),
+                                              f->unknown_disabled, sizeof f->unknown_disabled);
 }
 
 static lanes_cpu_features detected;

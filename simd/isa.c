@@ -74,7 +74,7 @@ static _Atomic int current_isa = LANES_ISA_NONE;
 static _Atomic int max_isa = LANES_ISA_COUNT - 1;
 static pthread_once_t env_once = PTHREAD_ONCE_INIT;
 static lanes_status env_status = LANES_OK;
-static char env_message[256];
+static char env_message[384];
 
 static void set_message(char *message, size_t size, const char *text)
 {
@@ -90,7 +90,8 @@ static lanes_isa best_below(int cap)
 
 lanes_isa lanes_isa_best(void) { return best_below(atomic_load(&max_isa)); }
 
-/* Why a set cannot run here, naming the first missing feature. */
+/* Why a set cannot run here, naming the missing features at the first level
+ * that lacks one (CPU, then OS, then the disable switch). */
 static lanes_status check_runnable(lanes_isa isa, char *why, size_t size)
 {
     if (!valid(isa)) {
@@ -102,22 +103,10 @@ static lanes_status check_runnable(lanes_isa isa, char *why, size_t size)
                  isa_names[isa]);
         return LANES_ERR_NOT_COMPILED;
     }
-    const lanes_cpu_features *cpu = lanes_cpu();
-    uint32_t missing = isa_needs[isa] & ~cpu->bits;
-    if (missing) {
-        uint32_t first = missing & (~missing + 1u);
-        const char *reason = "this CPU lacks";
-        if (cpu->raw_bits & first)
-            reason = "the feature is disabled by LANES_DISABLE_CPU_FEATURES:";
-        else if ((first & (LANES_CPU_AVX | LANES_CPU_FMA | LANES_CPU_AVX2 | LANES_CPU_AVX512F |
-                           LANES_CPU_AVX512DQ | LANES_CPU_AVX512BW | LANES_CPU_AVX512VL)) &&
-                 !(cpu->bits & LANES_CPU_OSXSAVE))
-            reason = "the OS has not enabled extended register state (OSXSAVE) needed by";
-        else if ((first & (LANES_CPU_AVX512F | LANES_CPU_AVX512DQ | LANES_CPU_AVX512BW |
-                           LANES_CPU_AVX512VL)) && (cpu->xcr0 & 0xe0) != 0xe0 && cpu->xcr0)
-            reason = "the OS has not enabled the ZMM register state (XCR0) needed by";
-        snprintf(why, size, "instruction set '%s' cannot run on this CPU: %s %s", isa_names[isa],
-                 reason, lanes_cpu_feature_name(first));
+    char reason[160];
+    if (lanes_cpu_explain_missing(lanes_cpu(), isa_needs[isa], reason, sizeof reason)) {
+        snprintf(why, size, "instruction set '%s' cannot run on this CPU: %s", isa_names[isa],
+                 reason);
         return LANES_ERR_CPU_LACKS;
     }
     return LANES_OK;
@@ -127,10 +116,17 @@ static void read_environment(void)
 {
     const char *cap = getenv("LANES_MAX_ISA");
     const char *force = getenv("LANES_ISA");
-    char why[200];
+    char why[240];
     lanes_isa chosen = LANES_ISA_NONE;
 
-    if (cap && *cap) {
+    const char *unknown = lanes_cpu()->unknown_disabled;
+    if (unknown[0]) {
+        env_status = LANES_ERR_BAD_INPUT;
+        snprintf(env_message, sizeof env_message,
+                 "LANES_DISABLE_CPU_FEATURES: '%s' is not a CPU feature; valid names: %s", unknown,
+                 lanes_cpu_all_feature_names());
+    }
+    if (env_status == LANES_OK && cap && *cap) {
         lanes_isa c = lanes_isa_from_name(cap);
         if (c == LANES_ISA_NONE) {
             env_status = LANES_ERR_UNKNOWN_ISA;
@@ -175,7 +171,7 @@ lanes_isa lanes_isa_current(void)
 
 lanes_status lanes_set_isa(lanes_isa isa, char *message, size_t message_size)
 {
-    char why[200];
+    char why[240];
     pthread_once(&env_once, read_environment);
     if (isa == LANES_ISA_NONE) {
         atomic_store(&current_isa, (int)lanes_isa_best());

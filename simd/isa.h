@@ -47,12 +47,19 @@ enum {
     LANES_CPU_FEATURE_COUNT = 19
 };
 
+/* Three views of the same features, from the CPU outwards: what cpuid says the
+ * processor has, what of that the OS has enabled (OSXSAVE and the XCR0
+ * register state), and what the test-only disable switch leaves. A set that
+ * cannot run is explained at the first view that lacks a feature it needs. */
 typedef struct lanes_cpu_features {
     uint32_t bits;          /* LANES_CPU_* after the test-only disable switch */
-    uint32_t raw_bits;      /* as detected, before the switch */
+    uint32_t raw_bits;      /* usable: the CPU has it and the OS enabled its state */
+    uint32_t cpuid_bits;    /* the processor reports it, whatever the OS enabled */
     uint64_t xcr0;          /* 0 when xgetbv is not usable */
     char vendor[13];
     char brand[49];
+    /* The first name in LANES_DISABLE_CPU_FEATURES that is no feature, or "". */
+    char unknown_disabled[32];
 } lanes_cpu_features;
 
 /* Detected once, then cached. The environment variable
@@ -64,6 +71,15 @@ const lanes_cpu_features *lanes_cpu(void);
 const char *lanes_cpu_feature_name(uint32_t feature_bit);
 /* Writes the detected feature names, space separated, into buf. */
 void lanes_cpu_feature_list(uint32_t bits, char *buf, size_t size);
+/* Every feature name, comma separated, for messages. */
+const char *lanes_cpu_all_feature_names(void);
+/* Why features `needs` cannot all be used on `cpu`, in the order a user needs
+ * it: features the processor lacks, else register state the OS has not
+ * enabled, else features switched off by LANES_DISABLE_CPU_FEATURES. Writes
+ * the reason (without a trailing period) and returns false when nothing is
+ * missing. Pure: tests call it with CPUs this machine is not. */
+bool lanes_cpu_explain_missing(const lanes_cpu_features *cpu, uint32_t needs, char *why,
+                               size_t size);
 
 /* Name ("scalar", "sse4", "avx", "avx2", "avx512emu", "avx512") and lane count. */
 const char *lanes_isa_name(lanes_isa isa);
@@ -88,13 +104,14 @@ typedef enum lanes_status {
     LANES_ERR_UNKNOWN_ISA,    /* a name that is no set */
     LANES_ERR_NOT_COMPILED,   /* a set left out of this build */
     LANES_ERR_CPU_LACKS,      /* the CPU (or OS) cannot run the set */
-    LANES_ERR_BAD_INPUT
+    LANES_ERR_BAD_INPUT       /* e.g. an unknown name in LANES_DISABLE_CPU_FEATURES */
 } lanes_status;
 
 /* The active set. On first use it is chosen from LANES_ISA (forces a set),
  * else LANES_MAX_ISA (caps the automatic choice), else the best set.
  * lanes_isa_init() reports a bad environment value through its status and
- * message; lanes_isa_current() falls back to the best set after such an error
+ * message (an unknown name in LANES_DISABLE_CPU_FEATURES as LANES_ERR_BAD_INPUT,
+ * which no --isa or lanes_set_isa() can override); lanes_isa_current() falls back to the best set after such an error
  * has been reported, so library callers that ignore the status still never
  * run an instruction the CPU lacks. */
 lanes_status lanes_isa_init(char *message, size_t message_size);

@@ -125,7 +125,7 @@ message(STATUS "lanes accuracy --json: ${n} rows")
   set_tests_properties(${lanes_accuracy_tests} PROPERTIES
     LABELS accuracy TIMEOUT 1800
     ENVIRONMENT_MODIFICATION
-      "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:;LANES_MESH_DIR=set:${LANES_MESH_DIR}")
+      "${LANES_TEST_ENV};LANES_MESH_DIR=set:${LANES_MESH_DIR}")
   if(TEST scenes.fetch_meshes)
     set_tests_properties(${lanes_accuracy_tests} PROPERTIES FIXTURES_REQUIRED lanes_meshes)
   endif()

@@ -11,7 +11,8 @@ function(fail text)
   message(FATAL_ERROR "FAIL: ${text}")
 endfunction()
 
-foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
+# LANES_DISABLE_CPU_FEATURES stays: a run that simulates a CPU with less.
+foreach(var LANES_ISA LANES_MAX_ISA)
   unset(ENV{${var}})
 endforeach()
 

@@ -10,7 +10,8 @@
 #   ENV_ISA, ENV_MAX, ENV_DISABLE  values for LANES_ISA, LANES_MAX_ISA,
 #                LANES_DISABLE_CPU_FEATURES
 #   FLAG_ISA     passed as `--isa <value>`
-#   EXPECT       "select" (default): exit 0 with the set computed below;
+#   EXPECT       "select" (default): exit 0 with the set computed below (a
+#                forced set the CPU cannot run turns it into "reject");
 #                "reject": exit status exactly 2, and a message that names a
 #                missing feature (or lists the valid names, for a bad name)
 #   EXPECT_MESSAGE  a regular expression the output must also match
@@ -42,14 +43,20 @@ elseif(ENV_ISA)
 endif()
 
 set(expect_selected "")
+if(unknown_disabled)
+  set(EXPECT reject) # a typo in the switch must not pass for a CPU without it
+endif()
 if(EXPECT STREQUAL "select")
   if(forced)
-    if(NOT forced IN_LIST expect_supported)
+    if(forced IN_LIST expect_supported)
+      set(expect_selected "${forced}")
+    else()
+      # Forcing a set this CPU cannot run is refused: check the refusal.
       string(REPLACE ";" "," u "${usable}")
-      message("SKIP: '${forced}' cannot run here (usable features from ${feature_source}: ${u}; compiled: ${COMPILED})")
-      return()
+      message("'${forced}' cannot run here (usable features from ${feature_source}: ${u}; "
+              "compiled: ${COMPILED}): expecting a refusal")
+      set(EXPECT reject)
     endif()
-    set(expect_selected "${forced}")
   else()
     # The best native set at or below the cap; avx512emu never automatically.
     set(cap_index 5)
@@ -69,20 +76,9 @@ elseif(NOT EXPECT STREQUAL "reject")
 endif()
 
 # --- run it ------------------------------------------------------------------
-# A clean environment: a LANES_* variable set by whoever runs ctest must not
-# change what this test sees.
-foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
-  unset(ENV{${var}})
-endforeach()
-if(NOT "${ENV_ISA}" STREQUAL "")
-  set(ENV{LANES_ISA} "${ENV_ISA}")
-endif()
-if(NOT "${ENV_MAX}" STREQUAL "")
-  set(ENV{LANES_MAX_ISA} "${ENV_MAX}")
-endif()
-if(NOT "${ENV_DISABLE}" STREQUAL "")
-  set(ENV{LANES_DISABLE_CPU_FEATURES} "${ENV_DISABLE}")
-endif()
+# A LANES_* variable set by whoever runs ctest must not change what this test
+# sees, except the simulation of a CPU with less (check_oracle.cmake).
+lanes_oracle_environment()
 
 set(command "${CLI}" info --json)
 if(NOT "${FLAG_ISA}" STREQUAL "")
@@ -131,7 +127,19 @@ if(EXPECT STREQUAL "reject")
   if(EXPECT_MESSAGE AND NOT text MATCHES "${EXPECT_MESSAGE}")
     fail("the message does not match '${EXPECT_MESSAGE}'")
   endif()
-  if(forced AND NOT forced IN_LIST ALL_ISAS)
+  if(unknown_disabled)
+    # Refused for the switch's sake, whatever set was asked for.
+    list(GET unknown_disabled 0 first)
+    if(NOT text MATCHES "LANES_DISABLE_CPU_FEATURES: '${first}' is not a CPU feature")
+      fail("the message does not name '${first}' as an unknown feature of the switch")
+    endif()
+    foreach(f IN LISTS ALL_FEATURES)
+      string(REPLACE "." "\\." re "${f}")
+      if(NOT text MATCHES "(^|[^a-z0-9.])${re}([^a-z0-9.]|$)")
+        fail("the message does not list the valid feature name '${f}'")
+      endif()
+    endforeach()
+  elseif(forced AND NOT forced IN_LIST ALL_ISAS)
     # A name that is no set: the message must list the real ones.
     foreach(isa IN LISTS ALL_ISAS)
       if(NOT text MATCHES "(^|[^a-z0-9])${isa}([^a-z0-9]|$)")
@@ -139,30 +147,69 @@ if(EXPECT STREQUAL "reject")
       endif()
     endforeach()
   elseif(forced AND forced IN_LIST compiled)
-    # Refused for the CPU's sake: the message names a feature the set needs
-    # and the CPU (as the test sees it) lacks.
-    set(missing "")
+    # Refused for the CPU's sake: the message gives the first cause a user
+    # needs, as the oracle sees it. Features the CPU does not offer (absent
+    # from cpuid, or their register state not enabled by the OS: Linux drops
+    # both from /proc/cpuinfo alike) come before those the switch hides; the
+    # message must name such a feature, and must not blame the switch. Only
+    # when the CPU offers everything does the switch explain it, and then
+    # every needed feature it hides is named. No feature is named that the
+    # set needs and can use. (Which of CPU and OS it blames is checked by
+    # test_cpu_explain, on CPU states this machine is not.)
+    set(lacked "")
+    set(switched "")
+    set(available "")
     foreach(f IN LISTS NEEDS_${forced})
-      if(NOT f IN_LIST usable)
-        list(APPEND missing ${f})
+      if(NOT f IN_LIST features)
+        list(APPEND lacked ${f})
+      elseif(NOT f IN_LIST usable)
+        list(APPEND switched ${f})
+      else()
+        list(APPEND available ${f})
       endif()
     endforeach()
-    if(NOT missing)
+    if(NOT lacked AND NOT switched)
       fail("'${forced}' can run here, so refusing it is wrong")
     endif()
-    set(named "")
-    foreach(f IN LISTS missing)
-      string(REPLACE "." "\\." re "${f}")
-      if(text MATCHES "(^|[^a-z0-9.])${re}([^a-z0-9.]|$)")
-        list(APPEND named ${f})
+    function(named_in features out)
+      set(named "")
+      foreach(f IN LISTS features)
+        string(REPLACE "." "\\." re "${f}")
+        if(text MATCHES "(^|[^a-z0-9.])${re}([^a-z0-9.]|$)")
+          list(APPEND named ${f})
+        endif()
+      endforeach()
+      set(${out} "${named}" PARENT_SCOPE)
+    endfunction()
+    named_in("${available}" wrongly)
+    if(wrongly)
+      string(REPLACE ";" "," wrongly "${wrongly}")
+      fail("the message names features this CPU offers and the set can use: ${wrongly}")
+    endif()
+    if(lacked)
+      named_in("${lacked}" named)
+      string(REPLACE ";" "," lacked "${lacked}")
+      if(NOT named)
+        fail("the message names none of the features the CPU lacks (${lacked})")
       endif()
-    endforeach()
-    if(NOT named)
-      string(REPLACE ";" "," missing "${missing}")
-      fail("the message names none of the missing features (${missing})")
+      if(NOT text MATCHES "this CPU lacks|the OS has not enabled")
+        fail("the message does not say the CPU (or its OS) lacks ${lacked}")
+      endif()
+      if(text MATCHES "LANES_DISABLE_CPU_FEATURES")
+        fail("the message blames LANES_DISABLE_CPU_FEATURES, but the CPU lacks ${lacked}")
+      endif()
+    else()
+      named_in("${switched}" named)
+      if(NOT named STREQUAL switched)
+        string(REPLACE ";" "," switched "${switched}")
+        fail("the message does not name every feature the switch hides (${switched})")
+      endif()
+      if(NOT text MATCHES "LANES_DISABLE_CPU_FEATURES switches off")
+        fail("the message does not say that LANES_DISABLE_CPU_FEATURES hides the features")
+      endif()
     endif()
     string(REPLACE ";" "," named "${named}")
-    message("refused, naming: ${named}")
+    message("refused, naming: ${named}${simulated}")
   endif()
   message("PASS: refused with exit status 2")
   return()

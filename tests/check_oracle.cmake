@@ -7,10 +7,18 @@
 # in the detector or in isa.c shows up as a failure.
 #
 # Inputs: COMPILED (comma list of the sets the build made), FEATURES (comma
-# list; empty: /proc/cpuinfo), ENV_DISABLE (LANES_DISABLE_CPU_FEATURES).
-# Sets: compiled, usable (features after the switch), feature_source,
-# expect_supported (compiled and runnable), lanes_oracle_ok (FALSE: no view
-# of the CPU; the caller skips). Provides fail() and runnable().
+# list; empty: /proc/cpuinfo), ENV_DISABLE (the test's own
+# LANES_DISABLE_CPU_FEATURES), and LANES_DISABLE_CPU_FEATURES in the
+# environment: a whole run simulating a CPU with less (CI runs the suite so,
+# as if the CPU lacked AVX-512, and AVX2). The two lists add up.
+# Sets: compiled, features (what the CPU offers), disabled (both switches),
+# usable (features after the switches), unknown_disabled (names in the
+# switches that are no feature: the program must refuse them), disable_value (what the program under
+# test must get as LANES_DISABLE_CPU_FEATURES; empty: unset), feature_source,
+# simulated (a note for messages), expect_supported (compiled and runnable),
+# lanes_oracle_ok (FALSE: no view of the CPU; the caller skips). Provides
+# fail(), runnable() and lanes_oracle_environment() (sets the program's
+# LANES_* variables: the test's values and the simulation, nothing else).
 
 set(ALL_ISAS scalar sse4 avx avx2 avx512emu avx512)
 set(NEEDS_scalar sse2)
@@ -68,7 +76,25 @@ else()
 endif()
 
 # The disable switch takes features away from what the detector sees.
-string(REPLACE "," ";" disabled "${ENV_DISABLE}")
+set(disable_value "$ENV{LANES_DISABLE_CPU_FEATURES}")
+set(simulated "")
+if(NOT disable_value STREQUAL "")
+  set(simulated " (the run simulates a CPU without ${disable_value})")
+endif()
+if(NOT "${ENV_DISABLE}" STREQUAL "")
+  if(disable_value STREQUAL "")
+    set(disable_value "${ENV_DISABLE}")
+  else()
+    string(APPEND disable_value ",${ENV_DISABLE}")
+  endif()
+endif()
+string(REPLACE "," ";" disabled "${disable_value}")
+set(unknown_disabled "")
+foreach(f IN LISTS disabled)
+  if(NOT f IN_LIST ALL_FEATURES)
+    list(APPEND unknown_disabled ${f})
+  endif()
+endforeach()
 set(usable "${features}")
 if(disabled)
   list(REMOVE_ITEM usable ${disabled})
@@ -91,3 +117,21 @@ foreach(isa IN LISTS ALL_ISAS)
     list(APPEND expect_supported ${isa})
   endif()
 endforeach()
+
+# The environment of the program under test: LANES_ISA and LANES_MAX_ISA as
+# the test gives them (else unset), LANES_DISABLE_CPU_FEATURES as both
+# switches together.
+macro(lanes_oracle_environment)
+  foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
+    unset(ENV{${var}})
+  endforeach()
+  if(NOT "${ENV_ISA}" STREQUAL "")
+    set(ENV{LANES_ISA} "${ENV_ISA}")
+  endif()
+  if(NOT "${ENV_MAX}" STREQUAL "")
+    set(ENV{LANES_MAX_ISA} "${ENV_MAX}")
+  endif()
+  if(NOT "${disable_value}" STREQUAL "")
+    set(ENV{LANES_DISABLE_CPU_FEATURES} "${disable_value}")
+  endif()
+endmacro()

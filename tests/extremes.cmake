@@ -13,7 +13,7 @@ if(TARGET lanes_bvh AND TARGET lanes_scene)
   # ctest must not narrow them.
   set_tests_properties(extremes PROPERTIES
     LABELS kernels TIMEOUT 120
-    ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 else()
   message(STATUS "lanes: no BVH or scene library; the extremes test is not added")
 endif()

@@ -48,4 +48,4 @@ list(APPEND lanes_kernel_tests kernels.simd_ops)
 # ctest must not narrow them.
 set_tests_properties(${lanes_kernel_tests} PROPERTIES
   LABELS kernels TIMEOUT 600
-  ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+  ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")

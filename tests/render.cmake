@@ -27,7 +27,7 @@ if(TARGET lanes_render AND TARGET lanes_image)
   endif()
   set_tests_properties(render.isa PROPERTIES
     LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77
-    ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 else()
   message(STATUS "lanes: no renderer or image library; render test not added")
 endif()

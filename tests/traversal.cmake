@@ -23,7 +23,7 @@ if(TARGET lanes_embree_adapter AND TARGET lanes_render)
   # runs ctest must not narrow them.
   set_tests_properties(${lanes_traversal_tests} PROPERTIES
     LABELS traversal TIMEOUT 900
-    ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 else()
   message(STATUS "lanes: no Embree adapter or renderer; traversal tests not added")
 endif()
@@ -100,5 +100,5 @@ endif()
   add_test(NAME compare.badargs COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:lanes_cli>
            -DMODE=badargs -P ${lanes_compare_check})
   set_tests_properties(compare.json compare.badargs PROPERTIES LABELS compare TIMEOUT 600
-    ENVIRONMENT_MODIFICATION "LANES_ISA=unset:;LANES_MAX_ISA=unset:;LANES_DISABLE_CPU_FEATURES=unset:")
+    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 endif()

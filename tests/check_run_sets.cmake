@@ -1,11 +1,12 @@
-# Runs a test binary under qemu-x86_64 with a CPU model and checks that it
-# passed and that it ran exactly the kernel sets that model can run.
+# Runs a test binary under qemu-x86_64 with a CPU model (or, without QEMU, on
+# this CPU as the oracle sees it) and checks that it passed and that it ran
+# exactly the kernel sets that CPU can run.
 #
 #   cmake -DQEMU=<qemu-x86_64> -DQEMU_CPU=<model> -DFEATURES=<the model's
 #         features> -DCOMPILED=<sets> -DBINARY=<test> [-DARGS=a,b]
 #         [-DCHECK_SETS=ON] [-DPROBE=<program>]
 #         [-DVSIB_PROBE=<program> -DOBJECTS_<set>=<obj>|<obj>...]
-#         -P check_qemu_run.cmake
+#         -P check_run_sets.cmake
 #
 # PROBE: a program that exits 0 when this qemu handles what the test needs;
 # otherwise the test prints "SKIP: qemu cannot ..." (SKIP_REGULAR_EXPRESSION).
@@ -21,9 +22,7 @@ cmake_minimum_required(VERSION 3.25)
 
 include(${CMAKE_CURRENT_LIST_DIR}/check_oracle.cmake)
 
-foreach(var LANES_ISA LANES_MAX_ISA LANES_DISABLE_CPU_FEATURES)
-  unset(ENV{${var}})
-endforeach()
+lanes_oracle_environment()
 
 # A known emulator defect the test would trip over: skip, and say which.
 if(PROBE)
@@ -74,7 +73,12 @@ if(excluded)
   string(REPLACE ";" "," run_sets "${run_sets}")
   list(APPEND args --isa "${run_sets}")
 endif()
-set(command "${QEMU}" -cpu "${QEMU_CPU}" "${BINARY}" ${args})
+set(command "${BINARY}" ${args})
+set(where "this CPU${simulated}")
+if(QEMU)
+  list(PREPEND command "${QEMU}" -cpu "${QEMU_CPU}")
+  set(where "${QEMU_CPU}")
+endif()
 string(REPLACE ";" " " shown "${command}")
 message("run: ${shown}")
 execute_process(COMMAND ${command} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -100,19 +104,19 @@ if(CHECK_SETS)
     endif()
     if(isa IN_LIST expect_supported)
       if(NOT tested OR was_skipped)
-        list(APPEND problems "'${isa}' runs on ${QEMU_CPU} but was not (fully) tested")
+        list(APPEND problems "'${isa}' runs on ${where} but was not (fully) tested")
       endif()
     elseif(isa IN_LIST excluded)
       if(tested)
         list(APPEND problems "'${isa}' was left out, yet tested")
       endif()
     elseif(tested OR NOT was_skipped)
-      list(APPEND problems "'${isa}' cannot run on ${QEMU_CPU} but was not skipped")
+      list(APPEND problems "'${isa}' cannot run on ${where} but was not skipped")
     endif()
   endforeach()
   string(REPLACE ";" "," ran "${ran}")
   string(REPLACE ";" "," skipped "${skipped}")
-  message("qemu -cpu ${QEMU_CPU}: tested sets [${ran}], skipped [${skipped}]")
+  message("${where}: tested sets [${ran}], skipped [${skipped}]")
 endif()
 
 if(NOT status MATCHES "^[0-9]+$")
