@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -45,6 +46,53 @@ _Noreturn void cli_fail(const char *fmt, ...)
     va_end(ap);
     fputc('\n', stderr);
     exit(CLI_EXIT_USAGE);
+}
+
+void cli_make_dirs(const char *what, const char *dir)
+{
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path)
+        cli_fail("%s: cannot create %s: the path is too long", what, dir);
+    /* Each prefix ending at a '/', then the whole path: mkdir -p. */
+    for (char *p = path + 1;; p++) {
+        if (*p != '/' && *p != '\0') continue;
+        char saved = *p;
+        *p = '\0';
+        struct stat st;
+        if (mkdir(path, 0777) != 0 && errno != EEXIST)
+            cli_fail("%s: cannot create %s: %s", what, path, strerror(errno));
+        if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode))
+            cli_fail("%s: cannot create %s: %s is not a folder", what, dir, path);
+        *p = saved;
+        if (!saved) break;
+    }
+}
+
+void cli_make_parent_dirs(const char *what, const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash || slash == path) return;
+    char dir[4096];
+    if ((size_t)(slash - path) >= sizeof dir) cli_fail("%s: cannot write %s: the path is too long", what, path);
+    memcpy(dir, path, (size_t)(slash - path));
+    dir[slash - path] = '\0';
+    cli_make_dirs(what, dir);
+}
+
+FILE *cli_create_file(const char *what, const char *path)
+{
+    cli_make_parent_dirs(what, path);
+    FILE *f = fopen(path, "w");
+    if (!f) cli_fail("%s: cannot write %s: %s", what, path, strerror(errno));
+    return f;
+}
+
+void cli_finish_file(const char *what, const char *path, FILE *f)
+{
+    bool bad = ferror(f) != 0;
+    int saved = errno;
+    if (fclose(f) != 0 && !bad) bad = true, saved = errno;
+    if (bad) cli_fail("%s: cannot write %s: %s", what, path, strerror(saved ? saved : EIO));
 }
 
 void cli_warn(const char *fmt, ...)

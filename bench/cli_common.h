@@ -52,6 +52,16 @@ _Noreturn void cli_fail(const char *fmt, ...) CLI_PRINTF(1, 2);
 /* "<path>: <message>" and the command's usage on stderr, exit status 2. */
 _Noreturn void cli_usage_error(const cli_context *ctx, const cli_command *cmd, const char *fmt, ...)
     CLI_PRINTF(3, 4);
+/* Output files. Each creates the folders the path needs, and a failure
+ * ends the run (status 2) with the path and the OS's reason, prefixed by
+ * `what` ("study", "--csv"). */
+void cli_make_dirs(const char *what, const char *dir);
+/* The folders above a file's path. */
+void cli_make_parent_dirs(const char *what, const char *path);
+FILE *cli_create_file(const char *what, const char *path);
+/* Closes a file made by cli_create_file; a write error ends the run. */
+void cli_finish_file(const char *what, const char *path, FILE *f);
+
 /* "lanes: warning: <message>" on stderr; the run goes on. */
 void cli_warn(const char *fmt, ...) CLI_PRINTF(1, 2);
 

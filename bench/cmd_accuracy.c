@@ -108,8 +108,7 @@ static const char *csv_header =
 
 static void write_csv(const char *path, const row_list *rows)
 {
-    FILE *f = fopen(path, "w");
-    if (!f) cli_fail("accuracy: cannot write %s: %s", path, strerror(errno));
+    FILE *f = cli_create_file("accuracy", path);
     fputs(csv_header, f);
     for (size_t i = 0; i < rows->n; i++) {
         const acc_row *r = &rows->rows[i];
@@ -137,13 +136,12 @@ static void write_csv(const char *path, const row_list *rows)
         put_number(f, r->mrays, "%.4g", "");
         fputc('\n', f);
     }
-    fclose(f);
+    cli_finish_file("accuracy", path, f);
 }
 
 static void write_histograms(const char *path, const row_list *rows)
 {
-    FILE *f = fopen(path, "w");
-    if (!f) cli_fail("accuracy: cannot write %s: %s", path, strerror(errno));
+    FILE *f = cli_create_file("accuracy", path);
     fprintf(f, "mesh,translation,mode,isa,ulp_from,ulp_to,count\n");
     for (size_t i = 0; i < rows->n; i++) {
         const acc_row *r = &rows->rows[i];
@@ -155,7 +153,7 @@ static void write_histograms(const char *path, const row_list *rows)
                     lanes_isa_name(r->isa), lo, hi, (unsigned long long)r->c.t_hist[b]);
         }
     }
-    fclose(f);
+    cli_finish_file("accuracy", path, f);
 }
 
 static void write_json(FILE *f, const row_list *rows, const acc_plan *plan, const char *dir)
@@ -293,8 +291,7 @@ static void write_tables(FILE *f, const row_list *rows, const acc_plan *plan, ch
 static void write_trade(const char *path, const row_list *rows, const acc_plan *plan, char meshes[][64],
                         double most[2])
 {
-    FILE *f = fopen(path, "w");
-    if (!f) cli_fail("accuracy: cannot write %s: %s", path, strerror(errno));
+    FILE *f = cli_create_file("accuracy", path);
     fprintf(f, "mesh,mode,isa,leaks_per_1e7,aimed_leaks_per_1e7,mrays\n");
     most[0] = most[1] = 0.0;
     for (int m = 0; m < plan->nmeshes; m++)
@@ -320,7 +317,7 @@ static void write_trade(const char *path, const row_list *rows, const acc_plan *
                 fprintf(f, "%s,%s,%s,%.6g,%.6g,%.4g\n", meshes[m], lanes_accuracy_name((lanes_accuracy)mode),
                         lanes_isa_name((lanes_isa)i), rate, aimed, exp(log_sum / timed));
             }
-    fclose(f);
+    cli_finish_file("accuracy", path, f);
 }
 
 /* Mrays/s against leaks: a column per mesh, a row per kind of leak ray
@@ -578,8 +575,7 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
             cli_fail("accuracy: %s", err.message);
         plain_name(names[m], sizeof names[m], plan.meshes[m]);
     }
-    if (mkdir(out_dir, 0777) != 0 && errno != EEXIST)
-        cli_fail("accuracy: cannot create %s: %s", out_dir, strerror(errno));
+    cli_make_dirs("accuracy", out_dir);
 
     FILE *report = json ? stderr : stdout;
     char sets[128] = "";
@@ -657,15 +653,13 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
     snprintf(path, sizeof path, "%s/t_ulp_histograms.csv", out_dir);
     write_histograms(path, &rows);
     snprintf(path, sizeof path, "%s/accuracy.json", out_dir);
-    FILE *jf = fopen(path, "w");
-    if (!jf) cli_fail("accuracy: cannot write %s: %s", path, strerror(errno));
+    FILE *jf = cli_create_file("accuracy", path);
     write_json(jf, &rows, &plan, out_dir);
-    fclose(jf);
+    cli_finish_file("accuracy", path, jf);
     snprintf(path, sizeof path, "%s/tables.md", out_dir);
-    FILE *md = fopen(path, "w");
-    if (!md) cli_fail("accuracy: cannot write %s: %s", path, strerror(errno));
+    FILE *md = cli_create_file("accuracy", path);
     write_tables(md, &rows, &plan, names, notes);
-    fclose(md);
+    cli_finish_file("accuracy", path, md);
     write_plot(out_dir, &rows, names, &plan, report);
     if (json) {
         write_json(stdout, &rows, &plan, out_dir);

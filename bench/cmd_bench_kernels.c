@@ -828,8 +828,7 @@ static int bench_kernels_run(cli_context *ctx, const cli_command *self, int argc
     /* Open the CSV now: a bad path should fail before a minute of measuring. */
     FILE *csv = NULL;
     if (b->opt.csv) {
-        csv = fopen(b->opt.csv, "w");
-        if (!csv) cli_fail("--csv %s: cannot write: %s", b->opt.csv, strerror(errno));
+        csv = cli_create_file("--csv", b->opt.csv);
     }
 
     char why[200];
@@ -895,7 +894,7 @@ static int bench_kernels_run(cli_context *ctx, const cli_command *self, int argc
     print_inputs(b);
     if (csv) {
         write_csv(b, csv);
-        if (fclose(csv) != 0) cli_fail("--csv %s: write failed", b->opt.csv);
+        cli_finish_file("--csv", b->opt.csv, csv);
         printf("\nwrote %s\n", b->opt.csv);
     }
 

@@ -778,10 +778,9 @@ static void print_table(FILE *out, const compare *c)
     }
 }
 
-static bool write_csv(const char *path, const compare *c)
+static void write_csv(const char *path, const compare *c)
 {
-    FILE *f = fopen(path, "w");
-    if (!f) return false;
+    FILE *f = cli_create_file("compare: --csv", path);
     fprintf(f, "rays,engine,method,isa,threads,mrays,ratio\n");
     for (size_t i = 0; i < c->res.count; i++) {
         const row *w = &c->res.rows[i];
@@ -792,7 +791,7 @@ static bool write_csv(const char *path, const compare *c)
         cli_csv_field(f, w->isa);
         fprintf(f, ",%d,%.4f,%.4f\n", w->threads, w->mrays, w->ratio);
     }
-    return fclose(f) == 0;
+    cli_finish_file("compare: --csv", path, f);
 }
 
 static void print_json(const compare *c, double embree_build)
@@ -1080,10 +1079,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
                    ag->rays - ag->agree, ag->rays, ag->ties, ag->grazing, ag->other);
         }
     }
-    if (o->csv && !write_csv(o->csv, c)) {
-        cli_warn("compare: cannot write %s", o->csv);
-        status = 1;
-    }
+    if (o->csv) write_csv(o->csv, c);
     if (fflush(stdout) != 0) status = 1;
 
     free(primary);

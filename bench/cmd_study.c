@@ -81,7 +81,7 @@ static cli_progress progress_bar;
 static void progress(const char *what) { cli_progress_step(&progress_bar, what); }
 
 /* Median render time of plan->reps runs with counters off. */
-static double timed(const lanes_scene *scene, const lanes_accel *accel, bool packets,
+static double timed(const lanes_scene *scene, const lanes_render_accel *accel, bool packets,
                     const lanes_packet_render_options *po, const study_plan *plan, uint64_t *rays)
 {
     double t[64];
@@ -113,7 +113,7 @@ static void fill_common(study_row *r, const lanes_scene *scene, const char *rays
 }
 
 /* One packet configuration: a timed run and a counting run. */
-static void measure_packets(row_list *rows, const lanes_scene *scene, const lanes_accel *accel,
+static void measure_packets(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,
                             lanes_isa isa, lanes_packet_scheme scheme, lanes_queue_heuristic queue,
                             int queue_min, const study_plan *plan, FILE *hist)
 {
@@ -184,7 +184,7 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
     progress(what);
 }
 
-static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_accel *accel,
+static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,
                            lanes_isa isa, lanes_scheme scheme, const study_plan *plan)
 {
     lanes_packet_render_options po;
@@ -339,8 +339,7 @@ static void csv_number(FILE *f, double x)
 
 static void write_csv(const char *path, const row_list *rows)
 {
-    FILE *f = fopen(path, "w");
-    if (!f) cli_fail("study: cannot write %s: %s", path, strerror(errno));
+    FILE *f = cli_create_file("study", path);
     fprintf(f, "scene,rays,scheme,isa,lanes,queue,queue_min,packet,util_op,util_packet,seconds,mrays,"
                "ray_count,packets,live_rays_per_node,live_rays_per_leaf\n");
     for (size_t i = 0; i < rows->n; i++) {
@@ -355,7 +354,7 @@ static void write_csv(const char *path, const row_list *rows)
         }
         fputc('\n', f);
     }
-    fclose(f);
+    cli_finish_file("study", path, f);
 }
 
 static void write_json(FILE *f, const row_list *rows, const char *dir)
@@ -423,8 +422,7 @@ static void md_value(FILE *f, double x, const char *fmt)
 static void write_tables(const char *path, const row_list *rows, char scenes[][64], int nscenes,
                          const study_plan *plan)
 {
-    FILE *f = fopen(path, "w");
-    if (!f) cli_fail("study: cannot write %s: %s", path, strerror(errno));
+    FILE *f = cli_create_file("study", path);
     const lanes_cpu_features *cpu = lanes_cpu();
     fprintf(f, "# lanes width-scaling study\n\nCPU: %s. Image %dx%d, packets of %d rays, %d thread(s), "
                "accuracy mode %s, median of %d run(s). Times in seconds.\n\n",
@@ -548,7 +546,7 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
                         r->live_node, r->live_leaf);
             }
         }
-    fclose(f);
+    cli_finish_file("study", path, f);
 }
 
 /* gnuplot scripts read the CSV files; a missing gnuplot is reported, not hidden. */
@@ -708,7 +706,7 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         plan.isas[i] = lanes_isa_supported(isa) &&
                        (ctx->forced_isa == LANES_ISA_NONE || isa == ctx->forced_isa || isa == LANES_ISA_SCALAR);
     }
-    if (mkdir(out_dir, 0777) != 0 && errno != EEXIST) cli_fail("study: cannot create %s: %s", out_dir, strerror(errno));
+    cli_make_dirs("study", out_dir);
 
     int nisa = 0;
     for (int i = 0; i < LANES_ISA_COUNT; i++) nisa += plan.isas[i];
@@ -720,8 +718,7 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
 
     char hist_path[1024];
     snprintf(hist_path, sizeof hist_path, "%s/histograms.csv", out_dir);
-    FILE *hist = fopen(hist_path, "w");
-    if (!hist) cli_fail("study: cannot write %s: %s", hist_path, strerror(errno));
+    FILE *hist = cli_create_file("study", hist_path);
     fprintf(hist, "scene,rays,scheme,isa,queue,queue_min,rays_in_packet,packets\n");
 
     row_list rows = {0};
@@ -731,10 +728,10 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         lanes_error err;
         if (!lanes_scene_load(scene_specs[s], &scene, &err)) cli_fail("%s", err.message);
         snprintf(scenes[s], sizeof scenes[s], "%.63s", scene.name);
-        lanes_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
-        lanes_accel *by_width[17] = {0};
+        lanes_render_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
+        lanes_render_accel *by_width[17] = {0};
         /* the BVH2 is shared; each wide width gets its own collapse */
-        if (!lanes_accel_build(&scene, 0, 0, &accel4, &err)) cli_fail("%s", err.message);
+        if (!lanes_render_accel_build(&scene, 0, 0, &accel4, &err)) cli_fail("%s", err.message);
         accel8.bvh2 = accel4.bvh2;
         accel16.bvh2 = accel4.bvh2;
         if (!lanes_wbvh_from_bvh2(&accel4.bvh2, 4, &accel4.wide, &err) ||
@@ -767,10 +764,10 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
 #endif
         lanes_wbvh_free(&accel8.wide);
         lanes_wbvh_free(&accel16.wide);
-        lanes_accel_free(&accel4);
+        lanes_render_accel_free(&accel4);
         lanes_scene_free(&scene);
     }
-    fclose(hist);
+    cli_finish_file("study", hist_path, hist);
 
     char path[1024];
     snprintf(path, sizeof path, "%s/measurements.csv", out_dir);

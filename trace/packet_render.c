@@ -103,7 +103,7 @@ static bool push_shadow(shadow_list *l, pending_shadow r)
 /* Shared, read-only state of one render. */
 typedef struct {
     const lanes_scene *scene;
-    const lanes_accel *accel;
+    const lanes_render_accel *accel;
     const lanes_packet_render_options *opt; /* = &resolved */
     lanes_packet_render_options resolved;   /* the caller's, with the accuracy mode resolved */
     const lanes_kernels *k;
@@ -566,7 +566,14 @@ static uint32_t *subtree_counts(const lanes_bvh2 *b)
     return count;
 }
 
-bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
+int lanes_packet_min_size(int lanes)
+{
+    int n = 1;
+    while (n < lanes) n *= 4;
+    return n;
+}
+
+bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
                          const lanes_packet_render_options *opt, lanes_render_result *out,
                          lanes_packet_metrics *metrics, lanes_error *err)
 {
@@ -583,15 +590,21 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
                  lanes_isa_name(opt->base.isa));
         return false;
     }
-    int side = 1;
-    while ((side * 2) * (side * 2) <= opt->packet_size) side *= 2;
-    if (opt->packet_size < 1 || opt->packet_size > LANES_PACKET_MAX_RAYS || side * side < job.k->lanes ||
-        opt->queue_min < 1) {
+    int min_packet = lanes_packet_min_size(job.k->lanes);
+    if (opt->packet_size < min_packet || opt->packet_size > LANES_PACKET_MAX_RAYS) {
         snprintf(err->message, sizeof err->message,
-                 "render: packet size %d out of range (%d..%d) or queue size %d below 1", opt->packet_size,
-                 job.k->lanes, LANES_PACKET_MAX_RAYS, opt->queue_min);
+                 "render: packet size %d out of range (%d..%d at %d lanes: primary packets are square "
+                 "tiles of a power-of-two side, and the largest one of at most that many rays must "
+                 "hold a whole %d-lane group)",
+                 opt->packet_size, min_packet, LANES_PACKET_MAX_RAYS, job.k->lanes, job.k->lanes);
         return false;
     }
+    if (opt->queue_min < 1) {
+        snprintf(err->message, sizeof err->message, "render: queue size %d below 1", opt->queue_min);
+        return false;
+    }
+    int side = 1; /* the primary packets' tile: the largest power-of-two square that fits */
+    while ((side * 2) * (side * 2) <= opt->packet_size) side *= 2;
     job.width = opt->base.width > 0 ? opt->base.width : scene->camera.width;
     job.height = opt->base.height > 0 ? opt->base.height : scene->camera.height;
     if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||

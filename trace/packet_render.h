@@ -70,7 +70,13 @@ typedef struct lanes_packet_metrics {
     uint64_t shadow_made, shadow_traced;
 } lanes_packet_metrics;
 
-bool lanes_packet_render(const lanes_scene *scene, const lanes_accel *accel,
+/* The smallest packet a set of `lanes` lanes can trace: primary packets are
+ * square tiles of a power-of-two side, and the largest such tile of at most
+ * packet_size rays must hold a whole ray group (1, 4, 16, 16 for 1, 4, 8,
+ * 16 lanes). */
+int lanes_packet_min_size(int lanes);
+
+bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
                          const lanes_packet_render_options *opt, lanes_render_result *out,
                          lanes_packet_metrics *metrics, lanes_error *err);
 
