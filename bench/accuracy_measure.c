@@ -512,8 +512,8 @@ bool acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, dou
     }
     w->eps = lanes_scene_epsilon(&w->scene);
 
-    lanes_accel accel;
-    if (!lanes_accel_build(&w->scene, 0, threads, &accel, err)) goto fail;
+    lanes_render_accel accel;
+    if (!lanes_render_accel_build(&w->scene, 0, threads, &accel, err)) goto fail;
     w->bvh2 = accel.bvh2;
     static const int widths[3] = {4, 8, 16};
     for (int i = 0; i < 3; i++)

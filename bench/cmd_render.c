@@ -31,6 +31,17 @@ static void show_progress(void *ctx, double fraction)
     fflush(stderr);
 }
 
+static void release_accels(lanes_render_accel *accel, lanes_device device, lanes_accel api_accel)
+{
+    if (api_accel) {
+        lanes_accel_release(api_accel);
+        lanes_device_release(device);
+    } else {
+        lanes_render_accel_free(accel);
+    }
+}
+
+
 static int render_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
     const char *scene_spec = NULL, *out_path = NULL, *value;
@@ -76,6 +87,7 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
         }
     }
     if (!out_path) cli_usage_error(ctx, self, "no output file: give -o FILE (PNG, EXR, ...)");
+    cli_make_parent_dirs("render: -o", out_path);
 
     bool packets = strcmp(scheme_name, "packet") == 0 || strcmp(scheme_name, "ranged") == 0;
     int single_scheme = lanes_scheme_from_name(scheme_name);
@@ -92,8 +104,12 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     if (no_frustum) po.frustum = po.corner_test = po.leaf_frustum = false;
     po.base.isa = lanes_isa_current();
     const lanes_kernels *k = lanes_kernels_for(po.base.isa);
-    if (packets && po.packet_size < k->lanes)
-        cli_usage_error(ctx, self, "--packet %d is smaller than one %d-lane group", po.packet_size, k->lanes);
+    int min_packet = lanes_packet_min_size(k->lanes);
+    if (packets && (po.packet_size < min_packet || po.packet_size > LANES_PACKET_MAX_RAYS))
+        cli_usage_error(ctx, self,
+                        "--packet %d out of range (%d..%d at %s: a packet's largest square tile of a "
+                        "power-of-two side must hold a whole %d-lane group)",
+                        po.packet_size, min_packet, LANES_PACKET_MAX_RAYS, k->name, k->lanes);
 
     lanes_scene scene;
     lanes_error err;
@@ -102,10 +118,29 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     lanes_scene_plan_make(&scene, accuracy, &plan);
     po.base.accuracy = plan.accuracy;
     if (explain) lanes_scene_plan_explain(&plan, stdout);
-    lanes_accel accel;
+    /* The wide scheme goes through the public API (lanes/lanes.h), as a
+     * program linking liblanes would; the others use the internal BVHs. */
+    bool use_api = !packets && single_scheme == LANES_SCHEME_WIDE;
+    lanes_render_accel accel;
+    memset(&accel, 0, sizeof accel);
+    lanes_device device = NULL;
+    lanes_accel api_accel = NULL;
     uint64_t t0 = cli_now_ns();
-    if (!lanes_accel_build(&scene, packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
-                           po.base.threads, &accel, &err)) {
+    if (use_api) {
+        char config[128];
+        snprintf(config, sizeof config, "isa=%s,accuracy=%s,threads=%d", k->name,
+                 lanes_accuracy_name(plan.accuracy), po.base.threads);
+        lanes_status st = lanes_device_create(config, &device);
+        if (st == LANES_OK) st = lanes_render_api_accel_create(&scene, device, &api_accel);
+        if (st != LANES_OK) {
+            lanes_device_release(device);
+            lanes_scene_free(&scene);
+            const char *msg = lanes_last_error_message();
+            cli_fail("%s", msg[0] ? msg : lanes_status_name(st));
+        }
+        po.base.api_accel = api_accel;
+    } else if (!lanes_render_accel_build(&scene, packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
+                                         po.base.threads, &accel, &err)) {
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);
     }
@@ -123,14 +158,14 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
         ok = lanes_render(&scene, &accel, &po.base, &r, &err);
     }
     if (!ok) {
-        lanes_accel_free(&accel);
+        release_accels(&accel, device, api_accel);
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);
     }
     char msg[512];
     if (!lanes_image_write(out_path, r.width, r.height, r.rgb, msg, sizeof msg)) {
         lanes_render_result_free(&r);
-        lanes_accel_free(&accel);
+        release_accels(&accel, device, api_accel);
         lanes_scene_free(&scene);
         cli_fail("%s", msg);
     }
@@ -144,7 +179,7 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
            r.seconds > 0 ? (double)r.rays / r.seconds * 1e-6 : 0.0);
     printf("wrote %s\n", out_path);
     lanes_render_result_free(&r);
-    lanes_accel_free(&accel);
+    release_accels(&accel, device, api_accel);
     lanes_scene_free(&scene);
     return 0;
 }

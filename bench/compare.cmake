@@ -13,9 +13,9 @@ elseif(NOT TARGET lanes_render)
   message(STATUS "lanes: no lanes_render target yet; `lanes compare` is not built")
 else()
   add_library(lanes_embree_adapter STATIC ${CMAKE_CURRENT_LIST_DIR}/embree_adapter.c)
-  target_link_libraries(lanes_embree_adapter PUBLIC embree lanes_render lanes lanes_build_flags)
+  target_link_libraries(lanes_embree_adapter PUBLIC embree lanes_render lanes_internal lanes_build_flags)
 
   add_library(lanes_compare STATIC ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.c)
-  target_link_libraries(lanes_compare PUBLIC lanes_embree_adapter lanes_render lanes embree
+  target_link_libraries(lanes_compare PUBLIC lanes_embree_adapter lanes_render lanes_internal embree
                         Threads::Threads m lanes_build_flags)
 endif()

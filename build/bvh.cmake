@@ -1,10 +1,10 @@
-# Binned SAH BVH2, wide BVHs collapsed from it, and their statistics.
-# Included from the top-level CMakeLists.txt.
-add_library(lanes_bvh STATIC
-  ${CMAKE_CURRENT_LIST_DIR}/bvh_build.c
-  ${CMAKE_CURRENT_LIST_DIR}/bvh_wide.c
-  ${CMAKE_CURRENT_LIST_DIR}/bvh_stats.c)
-target_link_libraries(lanes_bvh PUBLIC lanes Threads::Threads m lanes_build_flags)
+# Binned SAH BVH2, wide BVHs collapsed from it, and their statistics
+# (bvh_build.c, bvh_wide.c, bvh_stats.c). Included from the top-level
+# CMakeLists.txt.
+# The builder is part of the library (the public API builds accels with
+# it); lanes_bvh names it for the internal programs that use it directly.
+add_library(lanes_bvh INTERFACE)
+target_link_libraries(lanes_bvh INTERFACE lanes_internal)
 
 # Build times against Embree's on the same triangles.
 find_package(embree 3 CONFIG QUIET)

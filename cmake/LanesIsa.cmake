@@ -1,6 +1,8 @@
 # One source, many widths: the per-ISA kernel sources are compiled once per
 # kernel set, each as its own OBJECT library with that set's flags and a
 # LANES_KSET_<SET> definition (simd/simd.h turns it into the symbol suffix).
+# Installed with the CMake package (find_package(lanes) includes it), so
+# other projects build their own width-generic kernels the same way.
 #
 # Flags go on each target with target_compile_options: source-file
 # properties are per directory and would leak one set's flags into all.
@@ -48,24 +50,39 @@ function(lanes_probe_isa isa out)
   set(${out} ${LANES_PROBE_OK_${isa}} PARENT_SCOPE)
 endfunction()
 
-# lanes_add_kernel_sets(<target-prefix> SOURCES <files...> SETS <sets...>)
-# Creates <prefix>_<set> OBJECT libraries and sets LANES_KERNEL_OBJECTS to
-# their objects.
+# lanes_add_kernel_sets(<target-prefix> SOURCES <files...> SETS <sets...>
+#                       [LINK <targets...>])
+# Creates <prefix>_<set> OBJECT libraries, one per set, each compiled with
+# that set's flags, LANES_KSET_<SET> and -ffp-contract=off (FMA only where
+# the code says vf_fmadd), and linked to LINK (default lanes::simd, the SIMD
+# layer's headers). Sets in the caller's scope:
+#   LANES_KERNEL_OBJECTS      their objects, to add to a library or program
+#   LANES_KERNEL_DEFINITIONS  LANES_HAVE_KSET_<SET> for each set, for the
+#                             baseline file that dispatches between them
 function(lanes_add_kernel_sets prefix)
-  cmake_parse_arguments(ARG "" "" "SOURCES;SETS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;SETS;LINK" ${ARGN})
+  if(NOT ARG_LINK)
+    set(ARG_LINK lanes::simd)
+  endif()
   set(objects "")
+  set(definitions "")
   foreach(isa IN LISTS ARG_SETS)
+    if(NOT DEFINED LANES_ISA_FLAGS_${isa})
+      message(FATAL_ERROR "lanes_add_kernel_sets: unknown kernel set '${isa}' (${LANES_ALL_ISAS})")
+    endif()
     string(TOUPPER "${isa}" ISA)
     set(target ${prefix}_${isa})
     add_library(${target} OBJECT ${ARG_SOURCES})
     target_compile_definitions(${target} PRIVATE LANES_KSET_${ISA})
-    target_compile_options(${target} PRIVATE ${LANES_ISA_FLAGS_${isa}}
+    target_compile_options(${target} PRIVATE ${LANES_ISA_FLAGS_${isa}} -ffp-contract=off
       # kernels run only what they say: no auto-vectoriser in the way of the
       # measured utilisation, and never into baseline code through LTO.
       -fno-tree-vectorize -fno-lto)
     set_target_properties(${target} PROPERTIES INTERPROCEDURAL_OPTIMIZATION OFF)
-    target_link_libraries(${target} PRIVATE lanes_build_flags)
+    target_link_libraries(${target} PRIVATE ${ARG_LINK})
     list(APPEND objects $<TARGET_OBJECTS:${target}>)
+    list(APPEND definitions LANES_HAVE_KSET_${ISA})
   endforeach()
   set(LANES_KERNEL_OBJECTS "${objects}" PARENT_SCOPE)
+  set(LANES_KERNEL_DEFINITIONS "${definitions}" PARENT_SCOPE)
 endfunction()

@@ -92,7 +92,7 @@ lanes_isa lanes_isa_best(void) { return best_below(atomic_load(&max_isa)); }
 
 /* Why a set cannot run here, naming the missing features at the first level
  * that lacks one (CPU, then OS, then the disable switch). */
-static lanes_status check_runnable(lanes_isa isa, char *why, size_t size)
+lanes_status lanes_isa_check(lanes_isa isa, char *why, size_t size)
 {
     if (!valid(isa)) {
         snprintf(why, size, "unknown instruction set; valid names: %s", lanes_isa_all_names());
@@ -139,7 +139,7 @@ static void read_environment(void)
     }
     if (env_status == LANES_OK && force && *force) {
         lanes_isa f = lanes_isa_from_name(force);
-        lanes_status st = check_runnable(f, why, sizeof why);
+        lanes_status st = lanes_isa_check(f, why, sizeof why);
         if (st != LANES_OK) {
             env_status = st;
             if (f == LANES_ISA_NONE)
@@ -178,7 +178,7 @@ lanes_status lanes_set_isa(lanes_isa isa, char *message, size_t message_size)
         set_message(message, message_size, "");
         return LANES_OK;
     }
-    lanes_status st = check_runnable(isa, why, sizeof why);
+    lanes_status st = lanes_isa_check(isa, why, sizeof why);
     set_message(message, message_size, st == LANES_OK ? "" : why);
     if (st == LANES_OK) atomic_store(&current_isa, (int)isa);
     return st;

@@ -10,18 +10,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Ordered by preference for the automatic choice; avx512emu sits below avx512
- * only for listing, it is never chosen automatically. */
-typedef enum lanes_isa {
-    LANES_ISA_SCALAR = 0,
-    LANES_ISA_SSE4,
-    LANES_ISA_AVX,
-    LANES_ISA_AVX2,
-    LANES_ISA_AVX512EMU,
-    LANES_ISA_AVX512,
-    LANES_ISA_COUNT,
-    LANES_ISA_NONE = -1
-} lanes_isa;
+#include "lanes/lanes.h"
+
+/* lanes_isa and the choice of the active set (lanes_isa_name ... lanes_set_max_isa)
+ * are public: lanes/lanes.h. What follows is internal: CPU features. */
 
 /* CPU features lanes cares about, as bits of lanes_cpu_features.bits. */
 enum {
@@ -81,48 +73,7 @@ const char *lanes_cpu_all_feature_names(void);
 bool lanes_cpu_explain_missing(const lanes_cpu_features *cpu, uint32_t needs, char *why,
                                size_t size);
 
-/* Name ("scalar", "sse4", "avx", "avx2", "avx512emu", "avx512") and lane count. */
-const char *lanes_isa_name(lanes_isa isa);
-int lanes_isa_lanes(lanes_isa isa);
-/* LANES_ISA_NONE for an unknown name. */
-lanes_isa lanes_isa_from_name(const char *name);
 /* The CPU features a set needs, as LANES_CPU_* bits. */
 uint32_t lanes_isa_required_features(lanes_isa isa);
-/* Was this set compiled into the library (LANES_ISAS at configure time)? */
-bool lanes_isa_compiled(lanes_isa isa);
-/* Can this CPU (after the disable switch) run the set? */
-bool lanes_isa_cpu_can_run(lanes_isa isa);
-/* Compiled and runnable. */
-bool lanes_isa_supported(lanes_isa isa);
-
-/* The best native set this CPU runs, capped by LANES_MAX_ISA (or by
- * lanes_set_max_isa), among those compiled in. Never avx512emu. */
-lanes_isa lanes_isa_best(void);
-
-typedef enum lanes_status {
-    LANES_OK = 0,
-    LANES_ERR_UNKNOWN_ISA,    /* a name that is no set */
-    LANES_ERR_NOT_COMPILED,   /* a set left out of this build */
-    LANES_ERR_CPU_LACKS,      /* the CPU (or OS) cannot run the set */
-    LANES_ERR_BAD_INPUT       /* e.g. an unknown name in LANES_DISABLE_CPU_FEATURES */
-} lanes_status;
-
-/* The active set. On first use it is chosen from LANES_ISA (forces a set),
- * else LANES_MAX_ISA (caps the automatic choice), else the best set.
- * lanes_isa_init() reports a bad environment value through its status and
- * message (an unknown name in LANES_DISABLE_CPU_FEATURES as LANES_ERR_BAD_INPUT,
- * which no --isa or lanes_set_isa() can override); lanes_isa_current() falls back to the best set after such an error
- * has been reported, so library callers that ignore the status still never
- * run an instruction the CPU lacks. */
-lanes_status lanes_isa_init(char *message, size_t message_size);
-lanes_isa lanes_isa_current(void);
-/* Force a set (LANES_ISA_NONE returns to the automatic choice). On error the
- * active set is unchanged and message says why, naming the missing feature. */
-lanes_status lanes_set_isa(lanes_isa isa, char *message, size_t message_size);
-lanes_status lanes_set_isa_by_name(const char *name, char *message, size_t message_size);
-lanes_status lanes_set_max_isa(lanes_isa cap, char *message, size_t message_size);
-
-/* Comma-separated list of every set name, for messages. */
-const char *lanes_isa_all_names(void);
 
 #endif

@@ -16,7 +16,7 @@
 #define LANES_CAT(a, b) LANES_CAT_(a, b)
 
 #if defined(LANES_KSET_SCALAR)
-#include "simd/vec1_scalar.h"
+#include "vec1_scalar.h"
 #define LANES_W 1
 #define LANES_VPREFIX v1
 #define LANES_SUFFIX _scalar
@@ -26,7 +26,7 @@
 #if !defined(__SSE4_1__) || !defined(__POPCNT__)
 #error "the sse4 set needs -msse4.1 -mpopcnt"
 #endif
-#include "simd/vec4_sse4.h"
+#include "vec4_sse4.h"
 #define LANES_W 4
 #define LANES_VPREFIX v4
 #define LANES_SUFFIX _sse4
@@ -36,7 +36,7 @@
 #if !defined(__AVX__) || defined(__AVX2__) || defined(__FMA__)
 #error "the avx set needs -mavx and neither AVX2 nor FMA"
 #endif
-#include "simd/vec8_avx.h"
+#include "vec8_avx.h"
 #define LANES_W 8
 #define LANES_VPREFIX v8
 #define LANES_SUFFIX _avx
@@ -46,7 +46,7 @@
 #if !defined(__AVX2__) || !defined(__FMA__) || defined(__AVX512F__)
 #error "the avx2 set needs -mavx2 -mfma and no AVX-512"
 #endif
-#include "simd/vec8_avx.h"
+#include "vec8_avx.h"
 #define LANES_W 8
 #define LANES_VPREFIX v8
 #define LANES_SUFFIX _avx2
@@ -56,7 +56,7 @@
 #if !defined(__AVX2__) || !defined(__FMA__) || defined(__AVX512F__)
 #error "the avx512emu set needs -mavx2 -mfma and no AVX-512"
 #endif
-#include "simd/vec16_avx512emu.h"
+#include "vec16_avx512emu.h"
 #define LANES_W 16
 #define LANES_VPREFIX v16
 #define LANES_SUFFIX _avx512emu
@@ -66,7 +66,7 @@
 #if !defined(__AVX512F__) || !defined(__AVX512DQ__) || !defined(__AVX512BW__) || !defined(__AVX512VL__)
 #error "the avx512 set needs -mavx512f -mavx512dq -mavx512bw -mavx512vl"
 #endif
-#include "simd/vec16_avx512.h"
+#include "vec16_avx512.h"
 #define LANES_W 16
 #define LANES_VPREFIX v16
 #define LANES_SUFFIX _avx512

@@ -7,7 +7,7 @@
 #ifndef LANES_SIMD_VEC16_AVX512EMU_H
 #define LANES_SIMD_VEC16_AVX512EMU_H
 
-#include "simd/vec8_avx.h"
+#include "vec8_avx.h"
 
 #if !defined(__AVX2__) || !defined(__FMA__)
 #error "avx512emu is built on AVX2 and FMA"

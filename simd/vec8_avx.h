@@ -14,7 +14,7 @@
 #include <string.h>
 #include <immintrin.h>
 
-#include "simd/vec4_sse4.h"
+#include "vec4_sse4.h"
 
 typedef __m256 v8f;
 typedef __m256i v8i;

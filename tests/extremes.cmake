@@ -7,7 +7,7 @@
 #   ctest --test-dir out -R extremes --output-on-failure
 if(TARGET lanes_bvh AND TARGET lanes_scene)
   add_executable(test_extremes ${CMAKE_CURRENT_LIST_DIR}/test_extremes.c)
-  target_link_libraries(test_extremes PRIVATE lanes_bvh lanes_scene lanes)
+  target_link_libraries(test_extremes PRIVATE lanes_bvh lanes_scene lanes_internal)
   add_test(NAME extremes COMMAND test_extremes)
   # The test enumerates the sets itself: a LANES_* variable of whoever runs
   # ctest must not narrow them.

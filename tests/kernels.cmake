@@ -15,7 +15,7 @@ add_executable(test_kernels
   ${CMAKE_CURRENT_LIST_DIR}/test_kernels_tri.c
   ${CMAKE_CURRENT_LIST_DIR}/test_kernels_frustum.c
   ${CMAKE_CURRENT_LIST_DIR}/reference.c)
-target_link_libraries(test_kernels PRIVATE lanes)
+target_link_libraries(test_kernels PRIVATE lanes_internal)
 target_include_directories(test_kernels PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 
 set(lanes_kernel_tests "")
@@ -31,7 +31,8 @@ endforeach()
 set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
 lanes_add_kernel_sets(test_simd_ops_set
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops_set.c
-  SETS ${LANES_BUILT_ISAS})
+  SETS ${LANES_BUILT_ISAS}
+  LINK lanes_build_flags)
 set(lanes_simd_test_objects "${LANES_KERNEL_OBJECTS}")
 set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
 foreach(isa IN LISTS LANES_BUILT_ISAS)
@@ -39,7 +40,7 @@ foreach(isa IN LISTS LANES_BUILT_ISAS)
 endforeach()
 add_executable(test_simd_ops ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops.c ${lanes_simd_test_objects})
 target_compile_definitions(test_simd_ops PRIVATE ${LANES_HAVE_DEFS})
-target_link_libraries(test_simd_ops PRIVATE lanes)
+target_link_libraries(test_simd_ops PRIVATE lanes_internal)
 target_include_directories(test_simd_ops PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME kernels.simd_ops COMMAND test_simd_ops)
 list(APPEND lanes_kernel_tests kernels.simd_ops)

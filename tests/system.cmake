@@ -120,7 +120,7 @@ if(lanes_cli_target)
   # The reason for a refusal on CPU states this machine is not (Zen 3, an
   # OS without ZMM state, noxsave).
   add_executable(test_cpu_explain ${CMAKE_CURRENT_SOURCE_DIR}/test_cpu_explain.c)
-  target_link_libraries(test_cpu_explain PRIVATE lanes)
+  target_link_libraries(test_cpu_explain PRIVATE lanes_internal)
   add_test(NAME dispatch.explain_missing COMMAND test_cpu_explain)
   set_tests_properties(dispatch.explain_missing PROPERTIES LABELS dispatch TIMEOUT 60)
 
@@ -140,6 +140,37 @@ if(lanes_cli_target)
         ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
     endif()
   endforeach()
+
+  # Output paths: missing folders are made; a path that cannot be written
+  # is refused with the path and the OS's reason, status 2.
+  set(lanes_out_test ${CMAKE_CURRENT_BINARY_DIR}/cli_outputs)
+  add_test(NAME cli.output_folders
+    COMMAND bash -c "rm -rf \"$1\" && \"$0\" render -o \"$1/new/deeper/x.png\" --size 8x8 && test -s \"$1/new/deeper/x.png\""
+            $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
+  add_test(NAME cli.output_unwritable
+    COMMAND bash -c "\"$0\" render -o /proc/lanes-no-such-folder/x.png --size 8x8; test $? -eq 2"
+            $<TARGET_FILE:${lanes_cli_target}>)
+  set_tests_properties(cli.output_unwritable PROPERTIES
+    PASS_REGULAR_EXPRESSION "cannot create /proc/lanes-no-such-folder: No such file or directory")
+  # --packet: the range in the message is the rule that is applied.
+  foreach(pair IN ITEMS "sse4|2|4" "avx2|8|16")
+    string(REPLACE "|" ";" pair "${pair}")
+    list(GET pair 0 isa)
+    list(GET pair 1 packet)
+    list(GET pair 2 smallest)
+    if(isa IN_LIST LANES_BUILT_ISAS)
+      add_test(NAME cli.packet_range.${isa}
+        COMMAND bash -c "\"$0\" --isa ${isa} render -o \"$1/p.png\" --scheme packet --packet ${packet} --size 8x8; \
+                         test $? -eq 2 && \"$0\" --isa ${isa} render -o \"$1/p.png\" --scheme packet --packet ${smallest} --size 8x8"
+                $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
+      set_tests_properties(cli.packet_range.${isa} PROPERTIES
+        PASS_REGULAR_EXPRESSION "--packet ${packet} out of range [(]${smallest}[.][.]1024 at ${isa}.*wrote")
+      list(APPEND lanes_output_tests cli.packet_range.${isa})
+      break()
+    endif()
+  endforeach()
+  set_tests_properties(cli.output_folders cli.output_unwritable ${lanes_output_tests} PROPERTIES
+    LABELS cli TIMEOUT 120 ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 
   # The main job's benchmark runs and reports every set this CPU runs.
   add_test(NAME cli.bench_kernels_quick
@@ -195,6 +226,8 @@ foreach(t IN LISTS lanes_targets)
   get_target_property(options ${t} COMPILE_OPTIONS)
   if(NOT type MATCHES "^(EXECUTABLE|STATIC_LIBRARY|SHARED_LIBRARY|OBJECT_LIBRARY|MODULE_LIBRARY)$"
      OR t MATCHES "^lanes_kernels_" OR t STREQUAL "lanes_baseline"
+     # the libraries are made of the objects checked here and the kernels
+     OR t STREQUAL "lanes" OR t STREQUAL "lanes_shared"
      OR dir STREQUAL CMAKE_CURRENT_SOURCE_DIR OR "${options}" MATCHES "(^|;)-m")
     continue()
   endif()

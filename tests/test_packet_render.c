@@ -45,7 +45,7 @@ static lanes_isa isa_of_lanes(int lanes)
 
 /* Every packet scheme and queue at one set and accuracy mode against the
  * single-ray renderer at the same set and mode. */
-static void same_image_at(const lanes_scene *scene, const lanes_kernels *k, const lanes_accel *accel,
+static void same_image_at(const lanes_scene *scene, const lanes_kernels *k, const lanes_render_accel *accel,
                           lanes_accuracy mode)
 {
     char what[256];
@@ -114,14 +114,14 @@ static void same_image(const lanes_scene *scene)
             continue;
         }
         const lanes_kernels *k = lanes_kernels_for(isa);
-        lanes_accel accel;
-        if (!lanes_accel_build(scene, k->wide_width, 0, &accel, &err)) {
+        lanes_render_accel accel;
+        if (!lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err)) {
             check(false, err.message);
             return;
         }
         for (int mode = 0; mode < LANES_ACCURACY_COUNT; mode++)
             same_image_at(scene, k, &accel, (lanes_accuracy)mode);
-        lanes_accel_free(&accel);
+        lanes_render_accel_free(&accel);
     }
 }
 
@@ -129,7 +129,7 @@ static void same_image(const lanes_scene *scene)
  * 4.2.2, the mean over packets, returned) and total utilisation (*total:
  * live lanes over lane slots of every SIMD box and triangle test of the
  * render, the measure of Wu's Table 4.2). */
-static double utilisation(const lanes_scene *scene, const lanes_accel *accel, lanes_isa isa,
+static double utilisation(const lanes_scene *scene, const lanes_render_accel *accel, lanes_isa isa,
                           lanes_ray_type type, lanes_queue_heuristic queue, int size, double *total)
 {
     lanes_packet_render_options po;
@@ -153,7 +153,7 @@ static double utilisation(const lanes_scene *scene, const lanes_accel *accel, la
     return m.packets[type] ? m.packet_util_sum[type] / (double)m.packets[type] : NAN;
 }
 
-static bool load(const char *name, lanes_scene *scene, lanes_accel *accel)
+static bool load(const char *name, lanes_scene *scene, lanes_render_accel *accel)
 {
     lanes_error err;
     if (!lanes_scene_load(name, scene, &err)) {
@@ -161,7 +161,7 @@ static bool load(const char *name, lanes_scene *scene, lanes_accel *accel)
         skipped++;
         return false;
     }
-    if (!lanes_accel_build(scene, 0, 0, accel, &err)) {
+    if (!lanes_render_accel_build(scene, 0, 0, accel, &err)) {
         check(false, err.message);
         lanes_scene_free(scene);
         return false;
@@ -172,7 +172,7 @@ static bool load(const char *name, lanes_scene *scene, lanes_accel *accel)
 static void degradation(const char *name)
 {
     lanes_scene scene;
-    lanes_accel accel;
+    lanes_render_accel accel;
     if (!load(name, &scene, &accel)) return;
     lanes_isa w4 = isa_of_lanes(4), w8 = isa_of_lanes(8), w16 = isa_of_lanes(16);
     if (w4 == LANES_ISA_NONE || w8 == LANES_ISA_NONE || w16 == LANES_ISA_NONE) {
@@ -202,7 +202,7 @@ static void degradation(const char *name)
                    "(queued MAX %.4f): not asserted, reported\n", name, arrival, t8);
         }
     }
-    lanes_accel_free(&accel);
+    lanes_render_accel_free(&accel);
     lanes_scene_free(&scene);
 }
 
@@ -220,7 +220,7 @@ int main(void)
     degradation("20-bunnies-small");
     degradation("hairball-small");
 
-    lanes_accel accel;
+    lanes_render_accel accel;
     if (load("dragon", &scene, &accel)) {
         lanes_isa w16 = isa_of_lanes(16);
         if (w16 != LANES_ISA_NONE) {
@@ -232,7 +232,7 @@ int main(void)
                      "(total %.4f)", u, total);
             check(u > 0.6, what);
         }
-        lanes_accel_free(&accel);
+        lanes_render_accel_free(&accel);
         lanes_scene_free(&scene);
     }
     printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);

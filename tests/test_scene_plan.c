@@ -148,9 +148,9 @@ static void recommendation(void)
 static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool packets)
 {
     const lanes_kernels *k = lanes_kernels_current();
-    lanes_accel a;
+    lanes_render_accel a;
     lanes_error err;
-    if (!lanes_accel_build(s, k->wide_width, 0, &a, &err)) {
+    if (!lanes_render_accel_build(s, k->wide_width, 0, &a, &err)) {
         printf("FAIL: %s\n", err.message);
         return NAN;
     }
@@ -174,7 +174,7 @@ static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool pack
     } else {
         printf("FAIL: render: %s\n", err.message);
     }
-    lanes_accel_free(&a);
+    lanes_render_accel_free(&a);
     return sum;
 }
 
@@ -239,9 +239,9 @@ static void no_geometry_needed(void)
     }
     /* sphere_scene framed the camera on the sphere: the centre pixel hits it */
     const lanes_kernels *k = lanes_kernels_current();
-    lanes_accel a;
+    lanes_render_accel a;
     lanes_error err;
-    if (!lanes_accel_build(&s, k->wide_width, 0, &a, &err)) {
+    if (!lanes_render_accel_build(&s, k->wide_width, 0, &a, &err)) {
         CHECK(false, "%s", err.message);
         lanes_scene_free(&s);
         return;
@@ -264,7 +264,7 @@ static void no_geometry_needed(void)
     CHECK(!rendered && strstr(err.message, "accuracy mode"), "an unknown accuracy mode: %s",
           rendered ? "rendered" : err.message);
     if (rendered) lanes_render_result_free(&r);
-    lanes_accel_free(&a);
+    lanes_render_accel_free(&a);
     lanes_scene_free(&s);
 }
 

@@ -40,7 +40,7 @@ void lanes_render_default_options(lanes_render_options *o)
     o->area_samples = 4;
 }
 
-bool lanes_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_accel *a,
+bool lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_render_accel *a,
                        lanes_error *err)
 {
     lanes_bvh_build_options bo;
@@ -55,7 +55,7 @@ bool lanes_accel_build(const lanes_scene *scene, int wide_width, int threads, la
     return true;
 }
 
-void lanes_accel_free(lanes_accel *a)
+void lanes_render_accel_free(lanes_render_accel *a)
 {
     lanes_bvh2_free(&a->bvh2);
     if (a->wide.width) lanes_wbvh_free(&a->wide);
@@ -65,7 +65,7 @@ void lanes_accel_free(lanes_accel *a)
 /* Per-thread state: counters are summed when the threads finish. */
 typedef struct {
     const lanes_scene *scene;
-    const lanes_accel *accel;
+    const lanes_render_accel *accel;
     const lanes_render_options *opt; /* = &resolved */
     lanes_render_options resolved;   /* the caller's, with the accuracy mode resolved */
     const lanes_kernels *k;
@@ -87,6 +87,13 @@ typedef struct {
 
 static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float tfar)
 {
+    if (job->opt->api_accel) {
+        lanes_ray1 q = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, tnear, tfar};
+        lanes_hit1 h1;
+        lanes_intersect1(job->opt->api_accel, &q, &h1);
+        lanes_hit h = {h1.t, h1.u, h1.v, h1.prim_id == LANES_INVALID_ID ? LANES_NO_HIT : h1.prim_id};
+        return h;
+    }
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
     lanes_hit h;
     lanes_ray_prepare_rcp(&r, job->rcp);
@@ -99,6 +106,12 @@ static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float
 
 static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar)
 {
+    if (job->opt->api_accel) {
+        lanes_ray1 q = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, 0.0f, tfar};
+        bool hit = false;
+        lanes_occluded1(job->opt->api_accel, &q, &hit);
+        return hit;
+    }
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
     uint8_t hit = 0;
     lanes_ray_prepare_rcp(&r, job->rcp);
@@ -202,6 +215,22 @@ static void *worker(void *p)
     return NULL;
 }
 
+lanes_status lanes_render_api_accel_create(const lanes_scene *scene, lanes_device device,
+                                           lanes_accel *accel)
+{
+    /* The scene's triangles are unindexed: vertex j of triangle t is 3t + j. */
+    size_t n = scene->triangle_count;
+    uint32_t *idx = n <= UINT32_MAX / 3 ? malloc(3 * n * sizeof *idx + 1) : NULL;
+    if (!idx) {
+        *accel = NULL;
+        return LANES_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t i = 0; i < 3 * n; i++) idx[i] = (uint32_t)i;
+    lanes_status st = lanes_accel_create(device, scene->verts, 3 * n, idx, n, accel);
+    free(idx);
+    return st;
+}
+
 double lanes_render_clock(void)
 {
     struct timespec ts;
@@ -209,7 +238,7 @@ double lanes_render_clock(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
+bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
                   const lanes_render_options *opt, lanes_render_result *out, lanes_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -224,7 +253,10 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
                  lanes_isa_name(opt->isa));
         return false;
     }
-    if (opt->scheme == LANES_SCHEME_WIDE && accel->wide.width != job.k->wide_width) {
+    if (opt->api_accel && opt->scheme != LANES_SCHEME_WIDE) {
+        snprintf(err->message, sizeof err->message, "render: the public API traces the wide scheme only");
+        return false;
+    } else if (!opt->api_accel && opt->scheme == LANES_SCHEME_WIDE && accel->wide.width != job.k->wide_width) {
         snprintf(err->message, sizeof err->message,
                  "render: the wide scheme at %s needs a %d-wide BVH (have %d)", job.k->name,
                  job.k->wide_width, accel->wide.width);
@@ -250,6 +282,17 @@ bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
     job.opt = &job.resolved;
     job.eps = lanes_scene_epsilon(scene);
     job.rcp = lanes_accuracy_precision(job.plan.accuracy).rcp;
+    if (opt->api_accel) {
+        lanes_accel_info ai;
+        lanes_accel_get_info(opt->api_accel, &ai);
+        if (strcmp(ai.isa, lanes_isa_name(opt->isa)) != 0 ||
+            strcmp(ai.accuracy, lanes_accuracy_name(job.plan.accuracy)) != 0) {
+            snprintf(err->message, sizeof err->message,
+                     "render: the accel traces with %s in %s mode, the render asks for %s in %s mode",
+                     ai.isa, ai.accuracy, lanes_isa_name(opt->isa), lanes_accuracy_name(job.plan.accuracy));
+            return false;
+        }
+    }
 
     const lanes_camera *c = &scene->camera;
     job.cam_eye = v3_load(c->eye);

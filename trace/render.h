@@ -38,6 +38,10 @@ typedef struct lanes_render_options {
     /* Called from worker threads with the fraction done; may be NULL. */
     void (*progress)(void *ctx, double fraction);
     void *progress_ctx;
+    /* The wide scheme through the public API (lanes_intersect1 and
+     * lanes_occluded1 on this accel, whose device must have the same set and
+     * accuracy mode) instead of the kernel table; NULL: the kernel table. */
+    lanes_accel api_accel;
 } lanes_render_options;
 
 void lanes_render_default_options(lanes_render_options *o);
@@ -53,19 +57,24 @@ typedef struct lanes_render_result {
 
 /* The acceleration structures a render needs: the BVH2 and, for the wide
  * scheme, the wide BVH of the chosen set's width. */
-typedef struct lanes_accel {
+typedef struct lanes_render_accel {
     lanes_bvh2 bvh2;
     lanes_wbvh wide;        /* width == the set's wide_width, or 0 when not built */
-} lanes_accel;
+} lanes_render_accel;
 
-bool lanes_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_accel *a,
+bool lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_render_accel *a,
                        lanes_error *err);
-void lanes_accel_free(lanes_accel *a);
+void lanes_render_accel_free(lanes_render_accel *a);
+
+/* A public-API accel over the scene's triangles (prim_id = scene triangle
+ * index), for lanes_render_options.api_accel. */
+lanes_status lanes_render_api_accel_create(const lanes_scene *scene, lanes_device device,
+                                           lanes_accel *accel);
 
 /* Monotonic wall time in seconds, the clock both renderers time with. */
 double lanes_render_clock(void);
 
-bool lanes_render(const lanes_scene *scene, const lanes_accel *accel,
+bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
                   const lanes_render_options *opt, lanes_render_result *out, lanes_error *err);
 void lanes_render_result_free(lanes_render_result *r);
 

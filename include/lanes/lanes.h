@@ -1,0 +1,263 @@
+/* liblanes: CPU ray tracing whose kernels are compiled for every SIMD width
+ * (scalar, SSE4, AVX, AVX2, emulated and native AVX-512) and chosen at run
+ * time. This header is the whole public API; it is C11 and includes only
+ * standard headers.
+ *
+ *   lanes_device dev;
+ *   if (lanes_device_create("threads=2", &dev) != LANES_OK)
+ *       fprintf(stderr, "%s\n", lanes_last_error_message());
+ *   lanes_accel accel;
+ *   lanes_accel_create(dev, vertices, vertex_count, indices, triangle_count, &accel);
+ *   lanes_ray1 ray = {{0, 0, -5}, {0, 0, 1}, 0.0f, INFINITY};
+ *   lanes_hit1 hit;
+ *   lanes_intersect1(accel, &ray, &hit);   // hit.prim_id, hit.t, hit.u, hit.v
+ *   lanes_accel_release(accel);
+ *   lanes_device_release(dev);
+ *
+ * Conventions:
+ * - Every function returns a lanes_status (LANES_OK = 0) and never aborts or
+ *   exits on bad input. A failing call also leaves a message for the calling
+ *   thread (lanes_last_error_message) and calls the device's error callback,
+ *   if one is set.
+ * - A ray is org + t * dir for t in the closed interval [tnear, tfar]
+ *   (tnear > tfar: empty, a miss). Triangles are two-sided. A ray with a NaN
+ *   or infinite component in org or dir, a zero direction, or a NaN tnear
+ *   or tfar is invalid: it is reported as a miss (not occluded), and the
+ *   call returns LANES_ERR_BAD_INPUT naming the first such ray, after it
+ *   has traced every valid one.
+ * - Thread safety: a device and an accel are immutable once created. Any
+ *   number of threads may query one accel at once, and create accels on one
+ *   device at once. Releasing an object while another thread uses it is
+ *   the caller's error.
+ */
+#ifndef LANES_LANES_H
+#define LANES_LANES_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LANES_VERSION_MAJOR 0
+#define LANES_VERSION_MINOR 2
+#define LANES_VERSION_PATCH 0
+/* major * 10000 + minor * 100 + patch, for #if */
+#define LANES_VERSION                                                                      \
+    (LANES_VERSION_MAJOR * 10000 + LANES_VERSION_MINOR * 100 + LANES_VERSION_PATCH)
+
+#if defined(LANES_STATIC_DEFINE) || !defined(__GNUC__)
+#define LANES_API
+#else
+#define LANES_API __attribute__((visibility("default")))
+#endif
+
+/* "0.2.0": the version of the library linked at run time, which can differ
+ * from the header's LANES_VERSION_* when a shared library is replaced. */
+LANES_API const char *lanes_version(void);
+
+typedef enum lanes_status {
+    LANES_OK = 0,
+    LANES_ERR_UNKNOWN_ISA,    /* a name that is no instruction set */
+    LANES_ERR_NOT_COMPILED,   /* an instruction set left out of this build */
+    LANES_ERR_CPU_LACKS,      /* the CPU (or its OS) cannot run the instruction set */
+    LANES_ERR_BAD_INPUT,      /* an invalid argument: the message says which and why */
+    LANES_ERR_OUT_OF_MEMORY   /* an allocation failed, or the input cannot fit in memory */
+} lanes_status;
+
+/* "ok", "unknown instruction set", ...; never NULL. */
+LANES_API const char *lanes_status_name(lanes_status status);
+
+/* The message of the calling thread's last failing call ("" if none). Valid
+ * until that thread's next failing call. */
+LANES_API const char *lanes_last_error_message(void);
+
+/* ------------------------------------------------------------------------
+ * Instruction sets ("kernel sets") and the process-wide choice of one. A
+ * device takes its set from its config string, or else from this choice;
+ * programs that write their own width-generic kernels with lanes' SIMD
+ * layer (<lanes/simd/simd.h>, see the README) dispatch them with it.
+ * ------------------------------------------------------------------------ */
+
+/* Ordered by preference for the automatic choice; avx512emu (16 lanes from
+ * two AVX2 halves) is never chosen automatically. */
+typedef enum lanes_isa {
+    LANES_ISA_SCALAR = 0,
+    LANES_ISA_SSE4,
+    LANES_ISA_AVX,
+    LANES_ISA_AVX2,
+    LANES_ISA_AVX512EMU,
+    LANES_ISA_AVX512,
+    LANES_ISA_COUNT,
+    LANES_ISA_NONE = -1
+} lanes_isa;
+
+/* "scalar", "sse4", "avx", "avx2", "avx512emu", "avx512" ("none" for any
+ * other value) and the lane count (0 for any other value). */
+LANES_API const char *lanes_isa_name(lanes_isa isa);
+LANES_API int lanes_isa_lanes(lanes_isa isa);
+/* LANES_ISA_NONE for an unknown name. */
+LANES_API lanes_isa lanes_isa_from_name(const char *name);
+/* "scalar, sse4, avx, avx2, avx512emu, avx512", for messages. */
+LANES_API const char *lanes_isa_all_names(void);
+/* Was the set compiled into liblanes (its LANES_ISAS at configure time)? */
+LANES_API bool lanes_isa_compiled(lanes_isa isa);
+/* Can this CPU, with its OS, run the set? (LANES_DISABLE_CPU_FEATURES, a
+ * test switch, can say no to more.) Independent of what was compiled. */
+LANES_API bool lanes_isa_cpu_can_run(lanes_isa isa);
+/* Compiled and runnable. */
+LANES_API bool lanes_isa_supported(lanes_isa isa);
+/* LANES_OK when liblanes has the set and the CPU runs it; otherwise the
+ * status and, in why, the reason naming the missing features (what the CPU
+ * lacks, else what the OS has not enabled). Changes nothing. */
+LANES_API lanes_status lanes_isa_check(lanes_isa isa, char *why, size_t why_size);
+/* The best set compiled and runnable here, at most LANES_MAX_ISA (or
+ * lanes_set_max_isa's cap). Never avx512emu. */
+LANES_API lanes_isa lanes_isa_best(void);
+
+/* The process-wide choice. On first use it comes from LANES_ISA (forces a
+ * set), else LANES_MAX_ISA (caps the automatic choice), else the best set.
+ * lanes_isa_init() reports a bad value of those variables (or of
+ * LANES_DISABLE_CPU_FEATURES) with its status and message; after such an
+ * error lanes_isa_current() gives the best set, so a program that ignores
+ * the status still never runs an instruction the CPU lacks. */
+LANES_API lanes_status lanes_isa_init(char *message, size_t message_size);
+LANES_API lanes_isa lanes_isa_current(void);
+/* Force a set (LANES_ISA_NONE: back to the automatic choice), or cap the
+ * automatic choice. On error the choice is unchanged and message says why. */
+LANES_API lanes_status lanes_set_isa(lanes_isa isa, char *message, size_t message_size);
+LANES_API lanes_status lanes_set_isa_by_name(const char *name, char *message, size_t message_size);
+LANES_API lanes_status lanes_set_max_isa(lanes_isa cap, char *message, size_t message_size);
+
+/* ------------------------------------------------------------------------
+ * Device: the instruction set and the settings every accel on it uses.
+ * ------------------------------------------------------------------------ */
+typedef struct lanes_device_impl *lanes_device;
+
+/* config: NULL or "" for the defaults, or comma-separated key=value pairs
+ * (Embree's convention):
+ *   isa=NAME          scalar, sse4, avx, avx2, avx512emu, avx512; default:
+ *                     the process-wide choice (lanes_isa_current: LANES_ISA
+ *                     if set, else the best set the CPU runs, at most
+ *                     LANES_MAX_ISA). A set the CPU cannot run, or an
+ *                     unknown name, is an error: never a silent fallback.
+ *   threads=N         threads for building accels (0: all cores; default 0)
+ *   accuracy=MODE     fast, default or robust (see the README's accuracy
+ *                     modes; default: default)
+ * On error *device is NULL. */
+LANES_API lanes_status lanes_device_create(const char *config, lanes_device *device);
+/* NULL is allowed. Accels keep their device alive: release them in any order. */
+LANES_API lanes_status lanes_device_release(lanes_device device);
+
+/* Called on every failing call that involves the device (and its accels),
+ * from the failing thread, with the message lanes_last_error_message()
+ * returns. NULL removes it. Set it before sharing the device between
+ * threads. */
+typedef void (*lanes_error_callback)(void *user, lanes_status status, const char *message);
+LANES_API lanes_status lanes_device_set_error_callback(lanes_device device,
+                                                       lanes_error_callback callback, void *user);
+
+typedef struct lanes_device_info {
+    const char *isa;   /* the instruction set's name, "avx2" */
+    int lanes;         /* its SIMD width: 1, 4, 8 or 16 */
+    int node_width;    /* children per node of the accels it builds */
+    const char *accuracy;
+    int threads;       /* 0: all cores */
+} lanes_device_info;
+LANES_API lanes_status lanes_device_get_info(lanes_device device, lanes_device_info *info);
+
+/* ------------------------------------------------------------------------
+ * Accel: a BVH over a triangle mesh, built for the device's instruction set
+ * (its node width follows the set, so a mismatched width cannot happen).
+ * ------------------------------------------------------------------------ */
+typedef struct lanes_accel_impl *lanes_accel;
+
+/* vertices: x, y, z per vertex (3 * vertex_count floats); indices: three
+ * vertex indices per triangle. Both are read during the call only: the
+ * accel stores the triangles in its own layout, and the arrays may be freed
+ * afterwards. A triangle with an index >= vertex_count is an error.
+ * Triangles with a NaN or infinite vertex are left out (never hit; counted
+ * in lanes_accel_info.skipped); degenerate (zero-area) ones are never hit.
+ * prim_id in results is the triangle's position in `indices`. At least one
+ * triangle; at most 2^31 - 1. On error *accel is NULL. */
+LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
+                                          size_t vertex_count, const uint32_t *indices,
+                                          size_t triangle_count, lanes_accel *accel);
+/* NULL is allowed. */
+LANES_API lanes_status lanes_accel_release(lanes_accel accel);
+
+typedef struct lanes_accel_info {
+    const char *isa;      /* the device's instruction set and accuracy mode, */
+    const char *accuracy; /* which the accel's queries use */
+    size_t triangles;   /* as given */
+    size_t skipped;     /* left out for non-finite vertices */
+    size_t nodes;       /* wide nodes */
+    int node_width;
+    size_t bytes;       /* memory held */
+    float bounds_min[3], bounds_max[3];
+    double build_seconds;
+} lanes_accel_info;
+LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info *info);
+
+/* ------------------------------------------------------------------------
+ * Queries
+ * ------------------------------------------------------------------------ */
+#define LANES_INVALID_ID 0xffffffffu
+
+typedef struct lanes_ray1 {
+    float org[3];
+    float dir[3];   /* need not be normalised; t is in units of dir */
+    float tnear, tfar;
+} lanes_ray1;
+
+/* The closest hit: prim_id LANES_INVALID_ID for a miss (t, u, v are then
+ * +inf, 0, 0). u and v weigh the triangle's second and third vertex: the
+ * hit point is (1 - u - v) p0 + u p1 + v p2. */
+typedef struct lanes_hit1 {
+    float t, u, v;
+    uint32_t prim_id;
+} lanes_hit1;
+
+LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit);
+/* Any hit in [tnear, tfar]: *occluded is true or false. */
+LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded);
+
+/* N rays as structure of arrays: element i of each array is ray i. */
+typedef struct lanes_rays_soa {
+    const float *org_x, *org_y, *org_z;
+    const float *dir_x, *dir_y, *dir_z;
+    const float *tnear, *tfar;
+} lanes_rays_soa;
+
+/* N results as structure of arrays, as lanes_hit1. u and v may be NULL. */
+typedef struct lanes_hits_soa {
+    float *t, *u, *v;
+    uint32_t *prim_id;
+} lanes_hits_soa;
+
+/* A stream: n independent rays, any n (0 is allowed), traced one at a time
+ * through the wide BVH. For incoherent rays (diffuse bounces, shadows to
+ * many lights). */
+LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,
+                                              size_t n, lanes_hits_soa *hits);
+/* occluded[i] is 1 or 0. */
+LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
+                                             size_t n, uint8_t *occluded);
+
+/* Coherent packets (Wu 2016): n rays, any n, traced together in packets of
+ * up to 1024 consecutive rays with partition traversal and a frustum per
+ * packet. Results are the same as the stream's (bitwise for closest hits
+ * but for ties between triangles at equal t); faster where neighbouring
+ * rays are alike (camera rays in screen tiles, shadows to one light). */
+LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_rays_soa *rays,
+                                              size_t n, lanes_hits_soa *hits);
+LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays_soa *rays,
+                                             size_t n, uint8_t *occluded);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,524 @@
+/* The public API (include/lanes/lanes.h): devices, accels and queries on top
+ * of the kernel tables, the BVH builder and the wide-BVH collapse.
+ *
+ * Compiled for the x86-64 baseline; everything per ray happens in the
+ * kernels of the device's set. Only the functions declared LANES_API are
+ * exported from the shared library. */
+#include "lanes/lanes.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "build/bvh.h"
+#include "build/scene.h"
+#include "simd/isa.h"
+#include "trace/accuracy.h"
+#include "trace/kernels.h"
+
+#define LANES_VERSION_TEXT_(a, b, c) #a "." #b "." #c
+#define LANES_VERSION_TEXT(a, b, c) LANES_VERSION_TEXT_(a, b, c)
+
+struct lanes_device_impl {
+    const lanes_kernels *k;
+    int threads;
+    lanes_accuracy accuracy;
+    lanes_error_callback callback;
+    void *callback_user;
+    atomic_int refs; /* the application's reference and one per accel */
+};
+
+struct lanes_accel_impl {
+    lanes_device device;
+    lanes_bvh2 bvh2;
+    lanes_wbvh wide;
+    size_t triangles;
+    float bounds_min[3], bounds_max[3];
+};
+
+static _Thread_local char last_error[512];
+
+LANES_API const char *lanes_version(void)
+{
+    return LANES_VERSION_TEXT(LANES_VERSION_MAJOR, LANES_VERSION_MINOR, LANES_VERSION_PATCH);
+}
+
+LANES_API const char *lanes_status_name(lanes_status status)
+{
+    switch (status) {
+    case LANES_OK: return "ok";
+    case LANES_ERR_UNKNOWN_ISA: return "unknown instruction set";
+    case LANES_ERR_NOT_COMPILED: return "instruction set not compiled";
+    case LANES_ERR_CPU_LACKS: return "the CPU cannot run the instruction set";
+    case LANES_ERR_BAD_INPUT: return "bad input";
+    case LANES_ERR_OUT_OF_MEMORY: return "out of memory";
+    }
+    return "unknown status";
+}
+
+LANES_API const char *lanes_last_error_message(void) { return last_error; }
+
+/* Records the failure for this thread and tells the device's callback. */
+static lanes_status fail(lanes_device device, lanes_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static lanes_status fail(lanes_device device, lanes_status status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(last_error, sizeof last_error, fmt, ap);
+    va_end(ap);
+    if (device && device->callback) device->callback(device->callback_user, status, last_error);
+    return status;
+}
+
+/* ---------------------------------------------------------------- device */
+
+/* One key=value of the config string; value is not NUL-terminated. */
+static lanes_status apply_setting(struct lanes_device_impl *d, const char *key, size_t key_len,
+                                  const char *value, size_t value_len, bool *isa_given)
+{
+    char v[64];
+    if (value_len >= sizeof v)
+        return fail(NULL, LANES_ERR_BAD_INPUT, "device config: the value of '%.*s' is too long",
+                    (int)key_len, key);
+    memcpy(v, value, value_len);
+    v[value_len] = '\0';
+
+    if (key_len == 3 && strncmp(key, "isa", 3) == 0) {
+        lanes_isa isa = lanes_isa_from_name(v);
+        char why[256];
+        lanes_status st = lanes_isa_check(isa, why, sizeof why);
+        if (st != LANES_OK)
+            return fail(NULL, st, "device config: isa=%s: %s", v, why);
+        d->k = lanes_kernels_for(isa);
+        *isa_given = true;
+    } else if (key_len == 7 && strncmp(key, "threads", 7) == 0) {
+        char *end;
+        long n = strtol(v, &end, 10);
+        if (!v[0] || *end || n < 0 || n > 1024)
+            return fail(NULL, LANES_ERR_BAD_INPUT,
+                        "device config: threads=%s: not a whole number from 0 to 1024", v);
+        d->threads = (int)n;
+    } else if (key_len == 8 && strncmp(key, "accuracy", 8) == 0) {
+        int a = lanes_accuracy_from_name(v);
+        if (a < 0)
+            return fail(NULL, LANES_ERR_BAD_INPUT,
+                        "device config: accuracy=%s: unknown mode (fast, default, robust)", v);
+        d->accuracy = (lanes_accuracy)a;
+    } else {
+        return fail(NULL, LANES_ERR_BAD_INPUT,
+                    "device config: unknown key '%.*s' (keys: isa, threads, accuracy)",
+                    (int)key_len, key);
+    }
+    return LANES_OK;
+}
+
+static lanes_status parse_config(struct lanes_device_impl *d, const char *config, bool *isa_given)
+{
+    const char *p = config;
+    while (p && *p) {
+        p += strspn(p, " ,");
+        if (!*p) break;
+        size_t len = strcspn(p, ",");
+        const char *eq = memchr(p, '=', len);
+        size_t key_len = eq ? (size_t)(eq - p) : len;
+        while (key_len > 0 && p[key_len - 1] == ' ') key_len--;
+        if (!eq || key_len == 0)
+            return fail(NULL, LANES_ERR_BAD_INPUT,
+                        "device config: '%.*s' is not key=value (for example isa=avx2)", (int)len,
+                        p);
+        const char *value = eq + 1;
+        size_t value_len = len - (size_t)(value - p);
+        while (value_len > 0 && *value == ' ') value++, value_len--;
+        while (value_len > 0 && value[value_len - 1] == ' ') value_len--;
+        lanes_status st = apply_setting(d, p, key_len, value, value_len, isa_given);
+        if (st != LANES_OK) return st;
+        p += len;
+    }
+    return LANES_OK;
+}
+
+LANES_API lanes_status lanes_device_create(const char *config, lanes_device *device)
+{
+    if (!device) return fail(NULL, LANES_ERR_BAD_INPUT, "lanes_device_create: device is NULL");
+    *device = NULL;
+    struct lanes_device_impl *d = calloc(1, sizeof *d);
+    if (!d) return fail(NULL, LANES_ERR_OUT_OF_MEMORY, "lanes_device_create: out of memory");
+    d->accuracy = LANES_ACCURACY_DEFAULT;
+    bool isa_given = false;
+    lanes_status st = parse_config(d, config, &isa_given);
+    if (st == LANES_OK) {
+        /* LANES_ISA and LANES_MAX_ISA, as for every program using lanes: a
+         * bad value is an error here, not a quiet fall back to the best set,
+         * unless isa= replaces it. Nothing replaces a bad
+         * LANES_DISABLE_CPU_FEATURES. */
+        char why[384];
+        lanes_status env = lanes_isa_init(why, sizeof why);
+        if (env != LANES_OK && (!isa_given || env == LANES_ERR_BAD_INPUT))
+            st = fail(NULL, env, "%s", why);
+        else if (!isa_given)
+            d->k = lanes_kernels_for(lanes_isa_current());
+    }
+    if (st == LANES_OK && !d->k)
+        st = fail(NULL, LANES_ERR_NOT_COMPILED, "lanes_device_create: no kernel set available");
+    if (st != LANES_OK) {
+        free(d);
+        return st;
+    }
+    atomic_init(&d->refs, 1);
+    *device = d;
+    return LANES_OK;
+}
+
+static void device_unref(lanes_device d)
+{
+    if (atomic_fetch_sub(&d->refs, 1) == 1) free(d);
+}
+
+LANES_API lanes_status lanes_device_release(lanes_device device)
+{
+    if (device) device_unref(device);
+    return LANES_OK;
+}
+
+LANES_API lanes_status lanes_device_set_error_callback(lanes_device device,
+                                                       lanes_error_callback callback, void *user)
+{
+    if (!device)
+        return fail(NULL, LANES_ERR_BAD_INPUT, "lanes_device_set_error_callback: device is NULL");
+    device->callback = callback;
+    device->callback_user = user;
+    return LANES_OK;
+}
+
+LANES_API lanes_status lanes_device_get_info(lanes_device device, lanes_device_info *info)
+{
+    if (!device || !info)
+        return fail(device, LANES_ERR_BAD_INPUT, "lanes_device_get_info: %s is NULL",
+                    device ? "info" : "device");
+    info->isa = device->k->name;
+    info->lanes = device->k->lanes;
+    info->node_width = device->k->wide_width;
+    info->accuracy = lanes_accuracy_name(device->accuracy);
+    info->threads = device->threads;
+    return LANES_OK;
+}
+
+/* ----------------------------------------------------------------- accel */
+
+LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
+                                          size_t vertex_count, const uint32_t *indices,
+                                          size_t triangle_count, lanes_accel *accel)
+{
+    static const char fn[] = "lanes_accel_create";
+    if (!accel) return fail(device, LANES_ERR_BAD_INPUT, "%s: accel is NULL", fn);
+    *accel = NULL;
+    if (!device) return fail(NULL, LANES_ERR_BAD_INPUT, "%s: device is NULL", fn);
+    if (!vertices || !indices)
+        return fail(device, LANES_ERR_BAD_INPUT, "%s: %s is NULL", fn,
+                    vertices ? "indices" : "vertices");
+    if (triangle_count == 0) return fail(device, LANES_ERR_BAD_INPUT, "%s: no triangles", fn);
+    if (triangle_count > (size_t)INT32_MAX)
+        return fail(device, LANES_ERR_BAD_INPUT, "%s: %zu triangles; at most %d", fn,
+                    triangle_count, INT32_MAX);
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        if (indices[i] >= vertex_count)
+            return fail(device, LANES_ERR_BAD_INPUT,
+                        "%s: triangle %zu: vertex index %u, but there are %zu vertices", fn, i / 3,
+                        indices[i], vertex_count);
+
+    lanes_error err = {{0}};
+    double bytes = (double)triangle_count *
+                   (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    if (!lanes_memory_fits("an accel", bytes, &err))
+        return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: %s", fn, err.message);
+
+    struct lanes_accel_impl *a = calloc(1, sizeof *a);
+    lanes_scene scene;
+    lanes_scene_init(&scene);
+    scene.verts = malloc(triangle_count * 9 * sizeof(float));
+    if (!a || !scene.verts) {
+        free(a);
+        free(scene.verts);
+        return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory for %zu triangles", fn,
+                    triangle_count);
+    }
+    for (size_t t = 0; t < triangle_count; t++)
+        for (int c = 0; c < 3; c++)
+            memcpy(scene.verts + 9 * t + 3 * c, vertices + 3 * (size_t)indices[3 * t + c],
+                   3 * sizeof(float));
+    scene.triangle_count = triangle_count;
+
+    lanes_bvh_build_options bo;
+    lanes_bvh_default_options(&bo);
+    bo.threads = device->threads;
+    bool ok = lanes_bvh2_build(&scene, &bo, &a->bvh2, &err);
+    if (ok) lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
+    free(scene.verts);
+    if (ok && !lanes_wbvh_from_bvh2(&a->bvh2, device->k->wide_width, &a->wide, &err)) {
+        lanes_bvh2_free(&a->bvh2);
+        ok = false;
+    }
+    if (!ok) {
+        free(a);
+        /* The builder fails on memory or when no triangle is finite. */
+        bool memory = strstr(err.message, "memory") != NULL;
+        return fail(device, memory ? LANES_ERR_OUT_OF_MEMORY : LANES_ERR_BAD_INPUT, "%s: %s", fn,
+                    err.message);
+    }
+    a->triangles = triangle_count;
+    a->device = device;
+    atomic_fetch_add(&device->refs, 1);
+    *accel = a;
+    return LANES_OK;
+}
+
+LANES_API lanes_status lanes_accel_release(lanes_accel accel)
+{
+    if (!accel) return LANES_OK;
+    lanes_wbvh_free(&accel->wide);
+    lanes_bvh2_free(&accel->bvh2);
+    lanes_device d = accel->device;
+    free(accel);
+    device_unref(d);
+    return LANES_OK;
+}
+
+LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info *info)
+{
+    if (!accel || !info)
+        return fail(accel ? accel->device : NULL, LANES_ERR_BAD_INPUT,
+                    "lanes_accel_get_info: %s is NULL", accel ? "info" : "accel");
+    info->isa = accel->device->k->name;
+    info->accuracy = lanes_accuracy_name(accel->device->accuracy);
+    info->triangles = accel->triangles;
+    info->skipped = accel->bvh2.skipped;
+    info->nodes = accel->wide.node_count;
+    info->node_width = accel->wide.width;
+    info->bytes = lanes_bvh2_bytes(&accel->bvh2) + lanes_wbvh_bytes(&accel->wide);
+    memcpy(info->bounds_min, accel->bounds_min, sizeof info->bounds_min);
+    memcpy(info->bounds_max, accel->bounds_max, sizeof info->bounds_max);
+    info->build_seconds = accel->bvh2.build_seconds + accel->wide.collapse_seconds;
+    return LANES_OK;
+}
+
+/* --------------------------------------------------------------- queries */
+
+/* Invalid rays are traced as inactive ones (misses); the first is named. */
+typedef struct invalid_rays {
+    size_t count, first;
+} invalid_rays;
+
+static lanes_status query_result(lanes_accel accel, const char *fn, const invalid_rays *bad)
+{
+    if (!bad->count) return LANES_OK;
+    return fail(accel->device, LANES_ERR_BAD_INPUT,
+                "%s: %zu invalid ray%s (NaN or infinite origin or direction, zero direction, or "
+                "NaN tnear/tfar), the first is ray %zu; they were reported as misses",
+                fn, bad->count, bad->count == 1 ? "" : "s", bad->first);
+}
+
+/* Ray i of a SoA stream in the kernels' form, prepared for the device's
+ * accuracy mode. */
+static lanes_ray load_ray(const lanes_rays_soa *r, size_t i, lanes_rcp_mode rcp,
+                          invalid_rays *bad, size_t index)
+{
+    lanes_ray ray = {{r->org_x[i], r->org_y[i], r->org_z[i]},
+                     {r->dir_x[i], r->dir_y[i], r->dir_z[i]},
+                     {0, 0, 0},
+                     r->tnear[i],
+                     r->tfar[i]};
+    if (!lanes_ray_prepare_rcp(&ray, rcp) && bad->count++ == 0) bad->first = index;
+    return ray;
+}
+
+static void store_hit(lanes_hits_soa *h, size_t i, const lanes_hit *hit)
+{
+    bool found = hit->prim != LANES_NO_HIT;
+    h->t[i] = found ? hit->t : INFINITY;
+    if (h->u) h->u[i] = found ? hit->u : 0.0f;
+    if (h->v) h->v[i] = found ? hit->v : 0.0f;
+    h->prim_id[i] = found ? hit->prim : LANES_INVALID_ID;
+}
+
+static bool soa_complete(const lanes_rays_soa *r)
+{
+    return r->org_x && r->org_y && r->org_z && r->dir_x && r->dir_y && r->dir_z && r->tnear &&
+           r->tfar;
+}
+
+/* The checks every query makes; LANES_OK when it may go on. */
+static lanes_status check_query(lanes_accel accel, const char *fn, const void *rays,
+                                bool rays_complete, const void *out, bool out_complete)
+{
+    if (!accel) return fail(NULL, LANES_ERR_BAD_INPUT, "%s: accel is NULL", fn);
+    if (!rays || !rays_complete)
+        return fail(accel->device, LANES_ERR_BAD_INPUT, "%s: the ray%s NULL", fn,
+                    rays ? "s have an array that is" : " is");
+    if (!out || !out_complete)
+        return fail(accel->device, LANES_ERR_BAD_INPUT, "%s: the result%s NULL", fn,
+                    out ? " has an array that is" : " is");
+    return LANES_OK;
+}
+
+static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                   size_t n, lanes_hits_soa *hits);
+static lanes_status occluded_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                  size_t n, uint8_t *occluded);
+
+static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
+{
+    lanes_rays_soa s = {&r->org[0], &r->org[1], &r->org[2], &r->dir[0],
+                        &r->dir[1], &r->dir[2], &r->tnear, &r->tfar};
+    return s;
+}
+
+LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit)
+{
+    lanes_status st = check_query(accel, "lanes_intersect1", ray, true, hit, true);
+    if (st != LANES_OK) return st;
+    lanes_rays_soa one = single_as_soa(ray);
+    lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
+    return intersect_rays(accel, "lanes_intersect1", &one, 1, &out);
+}
+
+LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded)
+{
+    lanes_status st = check_query(accel, "lanes_occluded1", ray, true, occluded, true);
+    if (st != LANES_OK) return st;
+    lanes_rays_soa one = single_as_soa(ray);
+    uint8_t hit = 0;
+    st = occluded_rays(accel, "lanes_occluded1", &one, 1, &hit);
+    *occluded = hit != 0;
+    return st;
+}
+
+/* Rays go to the kernels in chunks: the wide traversal takes an array. */
+#define STREAM_CHUNK 64
+
+static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                   size_t n, lanes_hits_soa *hits)
+{
+    const lanes_device d = accel->device;
+    const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
+    invalid_rays bad = {0, 0};
+    lanes_ray chunk[STREAM_CHUNK];
+    lanes_hit found[STREAM_CHUNK];
+    for (size_t first = 0; first < n; first += STREAM_CHUNK) {
+        size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
+        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
+        d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, found, NULL);
+        for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);
+    }
+    return query_result(accel, fn, &bad);
+}
+
+static lanes_status occluded_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                  size_t n, uint8_t *occluded)
+{
+    const lanes_device d = accel->device;
+    const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
+    invalid_rays bad = {0, 0};
+    lanes_ray chunk[STREAM_CHUNK];
+    for (size_t first = 0; first < n; first += STREAM_CHUNK) {
+        size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
+        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
+        memset(occluded + first, 0, m);
+        d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, occluded + first,
+                            NULL);
+    }
+    return query_result(accel, fn, &bad);
+}
+
+LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,
+                                              size_t n, lanes_hits_soa *hits)
+{
+    static const char fn[] = "lanes_intersect_stream";
+    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
+                                  hits && hits->t && hits->prim_id);
+    return st != LANES_OK ? st : intersect_rays(accel, fn, rays, n, hits);
+}
+
+LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
+                                             size_t n, uint8_t *occluded)
+{
+    static const char fn[] = "lanes_occluded_stream";
+    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
+    return st != LANES_OK ? st : occluded_rays(accel, fn, rays, n, occluded);
+}
+
+/* Packets: up to LANES_PACKET_MAX_RAYS consecutive rays at a time, copied
+ * into the kernels' padded SoA arrays (which full-width loads need). */
+static lanes_status trace_packets(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                  size_t n, lanes_hits_soa *hits, uint8_t *occluded)
+{
+    const lanes_device d = accel->device;
+    const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
+    size_t cap = n < LANES_PACKET_MAX_RAYS ? n : LANES_PACKET_MAX_RAYS;
+    if (cap == 0) return LANES_OK;
+    lanes_rays pk;
+    uint32_t *prim = malloc(cap * sizeof *prim);
+    float *u = malloc(cap * sizeof *u), *v = malloc(cap * sizeof *v);
+    uint8_t *occ = malloc(cap);
+    if (!lanes_rays_alloc(&pk, cap) || !prim || !u || !v || !occ) {
+        free(prim), free(u), free(v), free(occ);
+        lanes_rays_free(&pk);
+        return fail(d, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory for a packet of %zu rays", fn,
+                    cap);
+    }
+    invalid_rays bad = {0, 0};
+    for (size_t first = 0; first < n; first += cap) {
+        size_t m = n - first < cap ? n - first : cap;
+        for (size_t i = 0; i < m; i++) {
+            size_t j = first + i;
+            /* The same validity rule as the stream's, so both report alike. */
+            (void)load_ray(rays, j, rcp, &bad, j);
+            pk.ox[i] = rays->org_x[j], pk.oy[i] = rays->org_y[j], pk.oz[i] = rays->org_z[j];
+            pk.dx[i] = rays->dir_x[j], pk.dy[i] = rays->dir_y[j], pk.dz[i] = rays->dir_z[j];
+            pk.tnear[i] = rays->tnear[j], pk.tfar[i] = rays->tfar[j];
+            prim[i] = LANES_NO_HIT;
+            occ[i] = 0;
+        }
+        pk.count = m;
+        d->k->rays_prepare(&pk, rcp);
+        lanes_frustum f;
+        d->k->frustum_build(&pk, NULL, m, &f);
+        lanes_packet_options po = {LANES_PACKET_PARTITION, d->accuracy, &f, true, false,
+                                   occluded != NULL};
+        d->k->trace_packet(&accel->bvh2, &po, &pk, prim, u, v, occ, NULL);
+        for (size_t i = 0; i < m; i++) {
+            if (occluded) {
+                occluded[first + i] = occ[i] ? 1 : 0;
+            } else {
+                lanes_hit h = {pk.tfar[i], u[i], v[i], prim[i]};
+                store_hit(hits, first + i, &h);
+            }
+        }
+    }
+    free(prim), free(u), free(v), free(occ);
+    lanes_rays_free(&pk);
+    return query_result(accel, fn, &bad);
+}
+
+LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_rays_soa *rays,
+                                              size_t n, lanes_hits_soa *hits)
+{
+    static const char fn[] = "lanes_intersect_packet";
+    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
+                                  hits && hits->t && hits->prim_id);
+    return st != LANES_OK ? st : trace_packets(accel, fn, rays, n, hits, NULL);
+}
+
+LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays_soa *rays,
+                                             size_t n, uint8_t *occluded)
+{
+    static const char fn[] = "lanes_occluded_packet";
+    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
+    return st != LANES_OK ? st : trace_packets(accel, fn, rays, n, NULL, occluded);
+}
