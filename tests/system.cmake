@@ -200,7 +200,7 @@ endforeach()
 lanes_hygiene_test(hygiene.no_constructors sections - ${lanes_all_kernel_objects})
 
 # Baseline code runs before dispatch: SSE2 at most. Scalar kernels too.
-set(lanes_baseline_objects $<TARGET_OBJECTS:lanes_baseline>)
+set(lanes_baseline_objects $<TARGET_OBJECTS:lanes_simd_objects> $<TARGET_OBJECTS:lanes_trace_objects>)
 if(scalar IN_LIST LANES_BUILT_ISAS)
   list(APPEND lanes_baseline_objects $<TARGET_OBJECTS:lanes_kernels_scalar>)
 endif()
@@ -225,7 +225,7 @@ foreach(t IN LISTS lanes_targets)
   get_target_property(dir ${t} SOURCE_DIR)
   get_target_property(options ${t} COMPILE_OPTIONS)
   if(NOT type MATCHES "^(EXECUTABLE|STATIC_LIBRARY|SHARED_LIBRARY|OBJECT_LIBRARY|MODULE_LIBRARY)$"
-     OR t MATCHES "^lanes_kernels_" OR t STREQUAL "lanes_baseline"
+     OR t MATCHES "^lanes_kernels_" OR t MATCHES "^lanes_(simd|trace)_objects$"
      # the libraries are made of the objects checked here and the kernels
      OR t STREQUAL "lanes" OR t STREQUAL "lanes_shared"
      OR dir STREQUAL CMAKE_CURRENT_SOURCE_DIR OR "${options}" MATCHES "(^|;)-m")

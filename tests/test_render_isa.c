@@ -36,6 +36,18 @@
 #define MAX_FRACTION_OVER 1e-3
 #define MAX_MEAN_ERROR 1e-3
 
+/* The options both renders use: the wide scheme, default mode, size x size. */
+static lanes_render_options wide_options(lanes_isa isa, int size)
+{
+    lanes_render_options opt;
+    lanes_render_default_options(&opt);
+    opt.isa = isa;
+    opt.scheme = LANES_SCHEME_WIDE;
+    opt.accuracy = LANES_ACCURACY_DEFAULT;
+    opt.width = opt.height = size;
+    return opt;
+}
+
 static bool render_with(const lanes_scene *scene, lanes_isa isa, int size, const char *path,
                         lanes_render_result *res)
 {
@@ -47,12 +59,7 @@ static bool render_with(const lanes_scene *scene, lanes_isa isa, int size, const
         printf("FAIL: acceleration structure for %s: %s\n", k->name, err.message);
         return false;
     }
-    lanes_render_options opt;
-    lanes_render_default_options(&opt);
-    opt.isa = isa;
-    opt.scheme = LANES_SCHEME_WIDE;
-    opt.accuracy = LANES_ACCURACY_DEFAULT;
-    opt.width = opt.height = size;
+    lanes_render_options opt = wide_options(isa, size);
     bool ok = lanes_render(scene, &accel, &opt, res, &err);
     lanes_render_accel_free(&accel);
     if (!ok) {
@@ -160,12 +167,7 @@ int main(int argc, char **argv)
         snprintf(config, sizeof config, "isa=%s,accuracy=default", lanes_isa_name(b));
         lanes_status st = lanes_device_create(config, &dev);
         if (st == LANES_OK) st = lanes_render_api_accel_create(&scene, dev, &api);
-        lanes_render_options opt;
-        lanes_render_default_options(&opt);
-        opt.isa = b;
-        opt.scheme = LANES_SCHEME_WIDE;
-        opt.accuracy = LANES_ACCURACY_DEFAULT;
-        opt.width = opt.height = size;
+        lanes_render_options opt = wide_options(b, size);
         opt.api_accel = api;
         lanes_render_result rp;
         lanes_render_accel none;

@@ -1,5 +1,5 @@
 /* The hot kernels' data layouts and the table through which every caller
- * reaches them. The kernels themselves are written once (trace/<family>_kernels.c)
+ * reaches them. The kernels themselves are written once (trace/kernels/<family>_kernels.c)
  * and compiled per instruction set; each set fills one lanes_kernels table.
  *
  * Compiled for the x86-64 baseline: no intrinsics here.

@@ -399,11 +399,12 @@ LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray,
     return st;
 }
 
-/* Rays go to the kernels in chunks: the wide traversal takes an array. */
 #define STREAM_CHUNK 64
 
-static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                   size_t n, lanes_hits_soa *hits)
+/* Rays one at a time through the wide BVH, in chunks (the traversal takes
+ * an array): closest hits into hits, or, with occluded, any hits. */
+static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                               size_t n, lanes_hits_soa *hits, uint8_t *occluded)
 {
     const lanes_device d = accel->device;
     const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
@@ -413,27 +414,28 @@ static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lane
     for (size_t first = 0; first < n; first += STREAM_CHUNK) {
         size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
         for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
-        d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, found, NULL);
-        for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);
+        if (occluded) {
+            memset(occluded + first, 0, m);
+            d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, occluded + first,
+                                NULL);
+        } else {
+            d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, found, NULL);
+            for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);
+        }
     }
     return query_result(accel, fn, &bad);
+}
+
+static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
+                                   size_t n, lanes_hits_soa *hits)
+{
+    return trace_rays(accel, fn, rays, n, hits, NULL);
 }
 
 static lanes_status occluded_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
                                   size_t n, uint8_t *occluded)
 {
-    const lanes_device d = accel->device;
-    const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
-    invalid_rays bad = {0, 0};
-    lanes_ray chunk[STREAM_CHUNK];
-    for (size_t first = 0; first < n; first += STREAM_CHUNK) {
-        size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
-        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
-        memset(occluded + first, 0, m);
-        d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, occluded + first,
-                            NULL);
-    }
-    return query_result(accel, fn, &bad);
+    return trace_rays(accel, fn, rays, n, NULL, occluded);
 }
 
 LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,

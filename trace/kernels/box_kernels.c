@@ -10,8 +10,8 @@
  *   running interval is always passed second, so a NaN slab distance leaves
  *   the interval as it was: a ray in the plane of a face counts as inside
  *   (boxes are closed). */
-#include "trace/box_core.h"
-#include "trace/kernel_decls.h"
+#include "trace/kernels/box_core.h"
+#include "trace/kernels/kernel_decls.h"
 
 LANES_BODY size_t box_packet_body(const lanes_rays *rays, const uint32_t *idx, size_t n,
                                   const lanes_box *box, uint32_t *hit, float *tentry,

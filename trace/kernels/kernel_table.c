@@ -1,7 +1,7 @@
 /* The kernel table of one instruction set: the only object of a per-ISA
  * library that other code reaches, through lanes_kernels_for(). */
-#include "trace/kernel_common.h"
-#include "trace/kernel_decls.h"
+#include "trace/kernels/kernel_common.h"
+#include "trace/kernels/kernel_decls.h"
 
 const lanes_kernels LANES_FN(lanes_kernels) = {
     .isa = LANES_THIS_ISA,

@@ -11,10 +11,10 @@
  * Masks are kept per tree depth and per group id, so a sibling popped later
  * still finds its parent's masks whatever the other subtree reordered. */
 #include "build/bvh.h"
-#include "trace/box_core.h"
-#include "trace/frustum_core.h"
-#include "trace/kernel_decls.h"
-#include "trace/triangle_core.h"
+#include "trace/kernels/box_core.h"
+#include "trace/kernels/frustum_core.h"
+#include "trace/kernels/kernel_decls.h"
+#include "trace/kernels/triangle_core.h"
 
 #define MAX_GROUPS ((LANES_PACKET_MAX_RAYS + LANES_W - 1) / LANES_W)
 /* Below this many groups a node is tested group by group, without the

@@ -8,7 +8,7 @@
 #ifndef LANES_TRACE_TRIANGLE_CORE_H
 #define LANES_TRACE_TRIANGLE_CORE_H
 
-#include "trace/kernel_common.h"
+#include "trace/kernels/kernel_common.h"
 
 #include <float.h>
 

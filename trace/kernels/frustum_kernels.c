@@ -7,8 +7,8 @@
  * of the set, even counting rounding. Bounds are widened outward, and a test
  * rejects only when it fails by more than a bound on its own rounding
  * error. The per-ray tests that follow a cull decide the actual hits. */
-#include "trace/frustum_core.h"
-#include "trace/kernel_decls.h"
+#include "trace/kernels/frustum_core.h"
+#include "trace/kernels/kernel_decls.h"
 
 void LANES_FN(lanes_frustum_build)(const lanes_rays *rays, const uint32_t *idx, size_t n,
                                    lanes_frustum *f)

@@ -4,7 +4,7 @@
 #ifndef LANES_TRACE_BOX_CORE_H
 #define LANES_TRACE_BOX_CORE_H
 
-#include "trace/kernel_common.h"
+#include "trace/kernels/kernel_common.h"
 
 /* The entry and exit of rays against one box, SIMD across rays. */
 LANES_BODY vmask box_vs_rays(const lanes_vray *r, const lanes_box *b, vfloat *entry, float exit_scale)

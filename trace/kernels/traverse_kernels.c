@@ -5,8 +5,8 @@
  * - bvh2: the binary BVH, two boxes at a time, the thesis' "single" scheme.
  * Both answer closest-hit and any-hit (occlusion) queries. */
 #include "build/bvh.h"
-#include "trace/kernel_decls.h"
-#include "trace/triangle_core.h"
+#include "trace/kernels/kernel_decls.h"
+#include "trace/kernels/triangle_core.h"
 
 #define WIDE_WIDTH LANES_WIDE_WIDTH
 

@@ -4,7 +4,7 @@
 #ifndef LANES_TRACE_FRUSTUM_CORE_H
 #define LANES_TRACE_FRUSTUM_CORE_H
 
-#include "trace/kernel_common.h"
+#include "trace/kernels/kernel_common.h"
 
 #include <float.h>
 

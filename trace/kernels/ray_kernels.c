@@ -1,7 +1,7 @@
 /* Ray set-up, SIMD across rays: reciprocal directions, and invalid rays
  * made inactive so that no kernel can report them as hits. */
-#include "trace/kernel_common.h"
-#include "trace/kernel_decls.h"
+#include "trace/kernels/kernel_common.h"
+#include "trace/kernels/kernel_decls.h"
 
 #include <float.h>
 

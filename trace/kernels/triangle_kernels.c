@@ -2,8 +2,8 @@
  * two forms: N rays against one triangle (packets) and one ray against N
  * triangles (wide leaves). Both forms share one vector core per algorithm
  * (triangle_core.h); the form only decides which operand is broadcast. */
-#include "trace/kernel_decls.h"
-#include "trace/triangle_core.h"
+#include "trace/kernels/kernel_decls.h"
+#include "trace/kernels/triangle_core.h"
 
 LANES_BODY size_t tri_packet_body(lanes_tri_algo algo, const lanes_rays *rays, const uint32_t *idx,
                                   size_t n, const lanes_triangle *tri, uint32_t *hit,
