@@ -367,11 +367,6 @@ static lanes_status check_query(lanes_accel accel, const char *fn, const void *r
     return LANES_OK;
 }
 
-static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                   size_t n, lanes_hits_soa *hits);
-static lanes_status occluded_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                  size_t n, uint8_t *occluded);
-
 static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
 {
     lanes_rays_soa s = {&r->org[0], &r->org[1], &r->org[2], &r->dir[0],
@@ -381,22 +376,34 @@ static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
 
 LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit)
 {
-    lanes_status st = check_query(accel, "lanes_intersect1", ray, true, hit, true);
+    static const char fn[] = "lanes_intersect1";
+    lanes_status st = check_query(accel, fn, ray, true, hit, true);
     if (st != LANES_OK) return st;
+    /* One ray straight to the kernel: renderers call this per ray. */
+    const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
+    invalid_rays bad = {0, 0};
+    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
+    lanes_hit found;
+    d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &found, NULL);
     lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
-    return intersect_rays(accel, "lanes_intersect1", &one, 1, &out);
+    store_hit(&out, 0, &found);
+    return query_result(accel, fn, &bad);
 }
 
 LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded)
 {
-    lanes_status st = check_query(accel, "lanes_occluded1", ray, true, occluded, true);
+    static const char fn[] = "lanes_occluded1";
+    lanes_status st = check_query(accel, fn, ray, true, occluded, true);
     if (st != LANES_OK) return st;
+    const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
+    invalid_rays bad = {0, 0};
+    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     uint8_t hit = 0;
-    st = occluded_rays(accel, "lanes_occluded1", &one, 1, &hit);
+    d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &hit, NULL);
     *occluded = hit != 0;
-    return st;
+    return query_result(accel, fn, &bad);
 }
 
 #define STREAM_CHUNK 64
@@ -426,25 +433,13 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
     return query_result(accel, fn, &bad);
 }
 
-static lanes_status intersect_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                   size_t n, lanes_hits_soa *hits)
-{
-    return trace_rays(accel, fn, rays, n, hits, NULL);
-}
-
-static lanes_status occluded_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                  size_t n, uint8_t *occluded)
-{
-    return trace_rays(accel, fn, rays, n, NULL, occluded);
-}
-
 LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,
                                               size_t n, lanes_hits_soa *hits)
 {
     static const char fn[] = "lanes_intersect_stream";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
                                   hits && hits->t && hits->prim_id);
-    return st != LANES_OK ? st : intersect_rays(accel, fn, rays, n, hits);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL);
 }
 
 LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
@@ -452,7 +447,7 @@ LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays
 {
     static const char fn[] = "lanes_occluded_stream";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
-    return st != LANES_OK ? st : occluded_rays(accel, fn, rays, n, occluded);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded);
 }
 
 /* Packets: up to LANES_PACKET_MAX_RAYS consecutive rays at a time, copied
