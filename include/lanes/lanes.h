@@ -179,7 +179,8 @@ typedef struct lanes_accel_impl *lanes_accel;
  * accel stores the triangles in its own layout, and the arrays may be freed
  * afterwards. A triangle with an index >= vertex_count is an error.
  * Triangles with a NaN or infinite vertex are left out (never hit; counted
- * in lanes_accel_info.skipped); degenerate (zero-area) ones are never hit.
+ * in lanes_accel_info.skipped; none finite is LANES_ERR_BAD_INPUT);
+ * degenerate (zero-area) ones are never hit.
  * prim_id in results is the triangle's position in `indices`. At least one
  * triangle; at most 2^31 - 1. On error *accel is NULL. */
 LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
