@@ -26,6 +26,7 @@ struct lanes_device_impl {
     const lanes_kernels *k;
     int threads;
     lanes_accuracy accuracy;
+    lanes_rcp_mode rcp; /* the reciprocal of that mode */
     lanes_error_callback callback;
     void *callback_user;
     atomic_int refs; /* the application's reference and one per accel */
@@ -171,6 +172,7 @@ LANES_API lanes_status lanes_device_create(const char *config, lanes_device *dev
         free(d);
         return st;
     }
+    d->rcp = lanes_accuracy_precision(d->accuracy).rcp;
     atomic_init(&d->refs, 1);
     *device = d;
     return LANES_OK;
@@ -367,43 +369,53 @@ static lanes_status check_query(lanes_accel accel, const char *fn, const void *r
     return LANES_OK;
 }
 
-static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
+/* A single ray in the kernels' form; false for an invalid one (then
+ * inactive: a miss). */
+static bool load_ray1(const lanes_ray1 *q, lanes_rcp_mode rcp, lanes_ray *r)
 {
-    lanes_rays_soa s = {&r->org[0], &r->org[1], &r->org[2], &r->dir[0],
-                        &r->dir[1], &r->dir[2], &r->tnear, &r->tfar};
-    return s;
+    *r = (lanes_ray){{q->org[0], q->org[1], q->org[2]},
+                     {q->dir[0], q->dir[1], q->dir[2]},
+                     {0, 0, 0},
+                     q->tnear,
+                     q->tfar};
+    return lanes_ray_prepare_rcp(r, rcp);
 }
 
+static lanes_status invalid_ray1(lanes_accel accel, const char *fn)
+{
+    invalid_rays bad = {1, 0};
+    return query_result(accel, fn, &bad);
+}
+
+/* Renderers call the single-ray queries once per ray, so they go straight
+ * to the kernel: the checks are a few compares on the way. */
 LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit)
 {
-    static const char fn[] = "lanes_intersect1";
-    lanes_status st = check_query(accel, fn, ray, true, hit, true);
-    if (st != LANES_OK) return st;
-    /* One ray straight to the kernel: renderers call this per ray. */
+    if (!accel || !ray || !hit) return check_query(accel, "lanes_intersect1", ray, true, hit, true);
     const lanes_device d = accel->device;
-    lanes_rays_soa one = single_as_soa(ray);
-    invalid_rays bad = {0, 0};
-    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
+    lanes_ray r;
+    bool valid = load_ray1(ray, d->rcp, &r);
     lanes_hit found;
     d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &found, NULL);
-    lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
-    store_hit(&out, 0, &found);
-    return query_result(accel, fn, &bad);
+    bool hit_something = found.prim != LANES_NO_HIT;
+    hit->t = hit_something ? found.t : INFINITY;
+    hit->u = hit_something ? found.u : 0.0f;
+    hit->v = hit_something ? found.v : 0.0f;
+    hit->prim_id = hit_something ? found.prim : LANES_INVALID_ID;
+    return valid ? LANES_OK : invalid_ray1(accel, "lanes_intersect1");
 }
 
 LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded)
 {
-    static const char fn[] = "lanes_occluded1";
-    lanes_status st = check_query(accel, fn, ray, true, occluded, true);
-    if (st != LANES_OK) return st;
+    if (!accel || !ray || !occluded)
+        return check_query(accel, "lanes_occluded1", ray, true, occluded, true);
     const lanes_device d = accel->device;
-    lanes_rays_soa one = single_as_soa(ray);
-    invalid_rays bad = {0, 0};
-    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
+    lanes_ray r;
+    bool valid = load_ray1(ray, d->rcp, &r);
     uint8_t hit = 0;
     d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &hit, NULL);
     *occluded = hit != 0;
-    return query_result(accel, fn, &bad);
+    return valid ? LANES_OK : invalid_ray1(accel, "lanes_occluded1");
 }
 
 #define STREAM_CHUNK 64
