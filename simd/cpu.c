@@ -68,12 +68,6 @@ static uint32_t feature_bits_from_names(const char *list, char *unknown, size_t 
     return bits;
 }
 
-const char *lanes_cpu_all_feature_names(void)
-{
-    return "sse2, sse3, ssse3, sse4.1, sse4.2, popcnt, osxsave, avx, f16c, fma, avx2, bmi1, bmi2, "
-           "lzcnt, avx512f, avx512cd, avx512dq, avx512bw, avx512vl";
-}
-
 #define YMM_FEATURES (LANES_CPU_AVX | LANES_CPU_F16C | LANES_CPU_FMA | LANES_CPU_AVX2)
 #define ZMM_FEATURES                                                                        \
     (LANES_CPU_AVX512F | LANES_CPU_AVX512CD | LANES_CPU_AVX512DQ | LANES_CPU_AVX512BW |      \
@@ -197,9 +191,20 @@ static void detect(lanes_cpu_features *f)
 }
 
 static lanes_cpu_features detected;
+static char all_feature_names[256]; /* "sse2, sse3, ...", from feature_names */
 static pthread_once_t detected_once = PTHREAD_ONCE_INIT;
 
-static void detect_once(void) { detect(&detected); }
+static void detect_once(void)
+{
+    detect(&detected);
+    append_names(all_feature_names, sizeof all_feature_names, (1u << LANES_CPU_FEATURE_COUNT) - 1);
+}
+
+const char *lanes_cpu_all_feature_names(void)
+{
+    lanes_cpu();
+    return all_feature_names;
+}
 
 const lanes_cpu_features *lanes_cpu(void)
 {

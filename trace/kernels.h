@@ -324,6 +324,9 @@ const lanes_kernels *lanes_kernels_current(void);
  * lanes_isa_supported() first. */
 const lanes_kernels *lanes_kernels_for(lanes_isa isa);
 
+/* The rule every prepare applies: no NaN or infinite component in o or d,
+ * d != 0, no NaN tnear or tfar. */
+bool lanes_ray_valid(const lanes_ray *ray);
 /* Scalar setup of one ray (reciprocal by division); returns false, and makes
  * the ray inactive, when it is invalid. */
 bool lanes_ray_prepare(lanes_ray *ray);

@@ -77,11 +77,16 @@ bool lanes_ray_prepare_rcp(lanes_ray *ray, lanes_rcp_mode mode)
     return ok;
 }
 
-bool lanes_ray_prepare(lanes_ray *ray)
+bool lanes_ray_valid(const lanes_ray *ray)
 {
     bool ok = !isnan(ray->tnear) && !isnan(ray->tfar);
     for (int a = 0; a < 3; a++) ok = ok && isfinite(ray->o[a]) && isfinite(ray->d[a]);
-    ok = ok && (ray->d[0] != 0.0f || ray->d[1] != 0.0f || ray->d[2] != 0.0f);
+    return ok && (ray->d[0] != 0.0f || ray->d[1] != 0.0f || ray->d[2] != 0.0f);
+}
+
+bool lanes_ray_prepare(lanes_ray *ray)
+{
+    bool ok = lanes_ray_valid(ray);
     for (int a = 0; a < 3; a++) ray->rd[a] = 1.0f / ray->d[a];
     /* finite ends, as lanes_rays_prepare does (see ray_kernels.c) */
     if (ray->tnear < -FLT_MAX) ray->tnear = -FLT_MAX;

@@ -26,7 +26,6 @@ struct lanes_device_impl {
     const lanes_kernels *k;
     int threads;
     lanes_accuracy accuracy;
-    lanes_rcp_mode rcp; /* the reciprocal of that mode */
     lanes_error_callback callback;
     void *callback_user;
     atomic_int refs; /* the application's reference and one per accel */
@@ -172,7 +171,6 @@ LANES_API lanes_status lanes_device_create(const char *config, lanes_device *dev
         free(d);
         return st;
     }
-    d->rcp = lanes_accuracy_precision(d->accuracy).rcp;
     atomic_init(&d->refs, 1);
     *device = d;
     return LANES_OK;
@@ -251,11 +249,21 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
         return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory for %zu triangles", fn,
                     triangle_count);
     }
-    for (size_t t = 0; t < triangle_count; t++)
+    size_t finite = 0;
+    for (size_t t = 0; t < triangle_count; t++) {
+        float *v = scene.verts + 9 * t;
         for (int c = 0; c < 3; c++)
-            memcpy(scene.verts + 9 * t + 3 * c, vertices + 3 * (size_t)indices[3 * t + c],
-                   3 * sizeof(float));
+            memcpy(v + 3 * c, vertices + 3 * (size_t)indices[3 * t + c], 3 * sizeof(float));
+        bool ok = true;
+        for (int k = 0; k < 9; k++) ok = ok && isfinite(v[k]);
+        finite += ok;
+    }
     scene.triangle_count = triangle_count;
+    if (finite == 0) {
+        free(a);
+        free(scene.verts);
+        return fail(device, LANES_ERR_BAD_INPUT, "%s: no triangle has finite coordinates", fn);
+    }
 
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
@@ -269,10 +277,8 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     }
     if (!ok) {
         free(a);
-        /* The builder fails on memory or when no triangle is finite. */
-        bool memory = strstr(err.message, "memory") != NULL;
-        return fail(device, memory ? LANES_ERR_OUT_OF_MEMORY : LANES_ERR_BAD_INPUT, "%s: %s", fn,
-                    err.message);
+        /* The input was checked above: what is left is memory. */
+        return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: %s", fn, err.message);
     }
     a->triangles = triangle_count;
     a->device = device;
@@ -369,53 +375,44 @@ static lanes_status check_query(lanes_accel accel, const char *fn, const void *r
     return LANES_OK;
 }
 
-/* A single ray in the kernels' form; false for an invalid one (then
- * inactive: a miss). */
-static bool load_ray1(const lanes_ray1 *q, lanes_rcp_mode rcp, lanes_ray *r)
+static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
 {
-    *r = (lanes_ray){{q->org[0], q->org[1], q->org[2]},
-                     {q->dir[0], q->dir[1], q->dir[2]},
-                     {0, 0, 0},
-                     q->tnear,
-                     q->tfar};
-    return lanes_ray_prepare_rcp(r, rcp);
-}
-
-static lanes_status invalid_ray1(lanes_accel accel, const char *fn)
-{
-    invalid_rays bad = {1, 0};
-    return query_result(accel, fn, &bad);
+    lanes_rays_soa s = {&r->org[0], &r->org[1], &r->org[2], &r->dir[0],
+                        &r->dir[1], &r->dir[2], &r->tnear, &r->tfar};
+    return s;
 }
 
 /* Renderers call the single-ray queries once per ray, so they go straight
- * to the kernel: the checks are a few compares on the way. */
+ * to the kernel rather than through the stream's chunk loop. */
 LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit)
 {
-    if (!accel || !ray || !hit) return check_query(accel, "lanes_intersect1", ray, true, hit, true);
+    static const char fn[] = "lanes_intersect1";
+    lanes_status st = check_query(accel, fn, ray, true, hit, true);
+    if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
-    lanes_ray r;
-    bool valid = load_ray1(ray, d->rcp, &r);
+    lanes_rays_soa one = single_as_soa(ray);
+    invalid_rays bad = {0, 0};
+    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     lanes_hit found;
     d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &found, NULL);
-    bool hit_something = found.prim != LANES_NO_HIT;
-    hit->t = hit_something ? found.t : INFINITY;
-    hit->u = hit_something ? found.u : 0.0f;
-    hit->v = hit_something ? found.v : 0.0f;
-    hit->prim_id = hit_something ? found.prim : LANES_INVALID_ID;
-    return valid ? LANES_OK : invalid_ray1(accel, "lanes_intersect1");
+    lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
+    store_hit(&out, 0, &found);
+    return query_result(accel, fn, &bad);
 }
 
 LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded)
 {
-    if (!accel || !ray || !occluded)
-        return check_query(accel, "lanes_occluded1", ray, true, occluded, true);
+    static const char fn[] = "lanes_occluded1";
+    lanes_status st = check_query(accel, fn, ray, true, occluded, true);
+    if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
-    lanes_ray r;
-    bool valid = load_ray1(ray, d->rcp, &r);
+    lanes_rays_soa one = single_as_soa(ray);
+    invalid_rays bad = {0, 0};
+    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     uint8_t hit = 0;
     d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &hit, NULL);
     *occluded = hit != 0;
-    return valid ? LANES_OK : invalid_ray1(accel, "lanes_occluded1");
+    return query_result(accel, fn, &bad);
 }
 
 #define STREAM_CHUNK 64
@@ -486,13 +483,16 @@ static lanes_status trace_packets(lanes_accel accel, const char *fn, const lanes
         size_t m = n - first < cap ? n - first : cap;
         for (size_t i = 0; i < m; i++) {
             size_t j = first + i;
-            /* The same validity rule as the stream's, so both report alike. */
-            (void)load_ray(rays, j, rcp, &bad, j);
             pk.ox[i] = rays->org_x[j], pk.oy[i] = rays->org_y[j], pk.oz[i] = rays->org_z[j];
             pk.dx[i] = rays->dir_x[j], pk.dy[i] = rays->dir_y[j], pk.dz[i] = rays->dir_z[j];
             pk.tnear[i] = rays->tnear[j], pk.tfar[i] = rays->tfar[j];
             prim[i] = LANES_NO_HIT;
             occ[i] = 0;
+            /* The stream's validity rule, so both report alike (rays_prepare
+             * below applies it too, without saying which ray). */
+            lanes_ray r = {{pk.ox[i], pk.oy[i], pk.oz[i]}, {pk.dx[i], pk.dy[i], pk.dz[i]},
+                           {0, 0, 0}, pk.tnear[i], pk.tfar[i]};
+            if (!lanes_ray_valid(&r) && bad.count++ == 0) bad.first = j;
         }
         pk.count = m;
         d->k->rays_prepare(&pk, rcp);

@@ -91,7 +91,8 @@ static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float
         lanes_ray1 q = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, tnear, tfar};
         lanes_hit1 h1;
         lanes_intersect1(job->opt->api_accel, &q, &h1);
-        lanes_hit h = {h1.t, h1.u, h1.v, h1.prim_id == LANES_INVALID_ID ? LANES_NO_HIT : h1.prim_id};
+        _Static_assert(LANES_INVALID_ID == LANES_NO_HIT, "a miss is the same id in both");
+        lanes_hit h = {h1.t, h1.u, h1.v, h1.prim_id};
         return h;
     }
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
