@@ -25,9 +25,21 @@ static void list_commands(FILE *out, const char *prefix, const cli_command *grou
     }
 }
 
+/* Usage texts say CLI_ISA_NAMES where the kernel sets' names go, so that
+ * they come from the one list of sets. */
+static void print_usage_text(FILE *out, const char *text)
+{
+    const char *mark = CLI_ISA_NAMES;
+    for (const char *at; (at = strstr(text, mark)) != NULL; text = at + strlen(mark)) {
+        fwrite(text, 1, (size_t)(at - text), out);
+        fputs(lanes_isa_all_names(), out);
+    }
+    fputs(text, out);
+}
+
 void cli_print_usage(FILE *out, const char *path, const cli_command *cmd)
 {
-    if (cmd->usage) fputs(cmd->usage, out);
+    if (cmd->usage) print_usage_text(out, cmd->usage);
     if (cmd->subcommands) {
         /* The root's own name is not part of a command's words. */
         const char *prefix = strchr(path, ' ') ? strchr(path, ' ') + 1 : "";

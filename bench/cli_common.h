@@ -15,6 +15,8 @@
 
 /* Exit status of every usage or input error (the design's "exit status 2"). */
 #define CLI_EXIT_USAGE 2
+/* In a usage text: replaced by the kernel sets' names when printed. */
+#define CLI_ISA_NAMES "<kernel sets>"
 
 #if defined(__GNUC__)
 #define CLI_PRINTF(fmt, args) __attribute__((format(printf, fmt, args)))

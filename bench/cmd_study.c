@@ -37,6 +37,8 @@ typedef struct {
     char scheme[40];
     char isa[16];
     int lanes;
+    char family[16]; /* instruction-set family (Embree rows: "embree") */
+    int emulated;    /* 1: the width is made of narrower vectors */
     char queue[8];
     int queue_min;
     int packet;
@@ -72,7 +74,8 @@ typedef struct {
     int packet;
     const int *queue_sizes;
     int queue_size_count;
-    bool isas[LANES_ISA_COUNT];
+    lanes_isa sets[LANES_ISA_COUNT]; /* the sets studied, scalar first, in rising rank */
+    int nsets;
     bool quiet;
 } study_plan;
 
@@ -107,6 +110,8 @@ static void fill_common(study_row *r, const lanes_scene *scene, const char *rays
     snprintf(r->scheme, sizeof r->scheme, "%s", scheme);
     snprintf(r->isa, sizeof r->isa, "%s", lanes_isa_name(isa));
     r->lanes = lanes_isa_lanes(isa);
+    snprintf(r->family, sizeof r->family, "%s", isa == LANES_ISA_NONE ? "embree" : lanes_isa_family(isa));
+    r->emulated = lanes_isa_emulated(isa);
     snprintf(r->queue, sizeof r->queue, "%s", queue);
     r->queue_min = queue_min;
     r->packet = packet;
@@ -260,9 +265,9 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
     double t[64];
     int reps = plan->reps < 64 ? plan->reps : 64;
 
-    for (int i = 0; i < LANES_ISA_COUNT; i++) {
-        if (!plan->isas[i]) continue;
-        const lanes_kernels *k = lanes_kernels_for((lanes_isa)i);
+    for (int j = 0; j < plan->nsets; j++) {
+        lanes_isa i = plan->sets[j];
+        const lanes_kernels *k = lanes_kernels_for(i);
         for (size_t r = 0; r < n; r++) {
             soa.ox[r] = rays[r].o[0], soa.oy[r] = rays[r].o[1], soa.oz[r] = rays[r].o[2];
             soa.dx[r] = rays[r].d[0], soa.dy[r] = rays[r].d[1], soa.dz[r] = rays[r].d[2];
@@ -286,7 +291,7 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
             t[rep] = (double)(cli_now_ns() - t0) * 1e-9;
         }
         study_row *row = add_row(rows);
-        fill_common(row, scene, "primary", "packet-trace", (lanes_isa)i, "none", 0, LANES_PACKET_MAX_RAYS);
+        fill_common(row, scene, "primary", "packet-trace", i, "none", 0, LANES_PACKET_MAX_RAYS);
         row->seconds = cli_median(t, (size_t)reps);
         row->mrays = (double)n / row->seconds * 1e-6;
         row->ray_count = (double)n;
@@ -341,7 +346,7 @@ static void write_csv(const char *path, const row_list *rows)
 {
     FILE *f = cli_create_file("study", path);
     fprintf(f, "scene,rays,scheme,isa,lanes,queue,queue_min,packet,util_op,util_packet,seconds,mrays,"
-               "ray_count,packets,live_rays_per_node,live_rays_per_leaf\n");
+               "ray_count,packets,live_rays_per_node,live_rays_per_leaf,family,emulated\n");
     for (size_t i = 0; i < rows->n; i++) {
         const study_row *r = &rows->rows[i];
         fprintf(f, "%s,%s,%s,%s,%d,%s,%d,%d,", r->scene, r->rays, r->scheme, r->isa, r->lanes, r->queue,
@@ -352,7 +357,7 @@ static void write_csv(const char *path, const row_list *rows)
             if (k) fputc(',', f);
             csv_number(f, v[k]);
         }
-        fputc('\n', f);
+        fprintf(f, ",%s,%d\n", r->family, r->emulated);
     }
     cli_finish_file("study", path, f);
 }
@@ -366,9 +371,10 @@ static void write_json(FILE *f, const row_list *rows, const char *dir)
         const study_row *r = &rows->rows[i];
         fprintf(f, "%s\n  {\"scene\": ", i ? "," : "");
         cli_json_string(f, r->scene);
-        fprintf(f, ", \"rays\": \"%s\", \"scheme\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"queue\": \"%s\", "
-                   "\"queue_min\": %d, \"packet\": %d, \"util_op\": ",
-                r->rays, r->scheme, r->isa, r->lanes, r->queue, r->queue_min, r->packet);
+        fprintf(f, ", \"rays\": \"%s\", \"scheme\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"family\": \"%s\", "
+                   "\"emulated\": %s, \"queue\": \"%s\", \"queue_min\": %d, \"packet\": %d, \"util_op\": ",
+                r->rays, r->scheme, r->isa, r->lanes, r->family, r->emulated ? "true" : "false", r->queue,
+                r->queue_min, r->packet);
         cli_json_number(f, r->util_op);
         fprintf(f, ", \"util_packet\": ");
         cli_json_number(f, r->util_packet);
@@ -437,11 +443,12 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
                "Arrival is global division in the order the rays were made (Hilbert order of the primary packets).\n\n"
                "| Scene | ISA | No Queue | CORNER queue | MAX queue | Arrival |\n|---|---|---|---|---|---|\n", best_q);
     for (int s = 0; s < nscenes; s++)
-        for (int i = 1; i < LANES_ISA_COUNT; i++) {
-            if (!plan->isas[i]) continue;
-            fprintf(f, "| %s | %s |", scenes[s], lanes_isa_name((lanes_isa)i));
+        for (int j = 0; j < plan->nsets; j++) {
+            lanes_isa i = plan->sets[j];
+            if (i == LANES_ISA_SCALAR) continue;
+            fprintf(f, "| %s | %s |", scenes[s], lanes_isa_name(i));
             for (int q = 0; q < 4; q++) {
-                const study_row *r = find(rows, scenes[s], "all", "packet", lanes_isa_name((lanes_isa)i), queues[q],
+                const study_row *r = find(rows, scenes[s], "all", "packet", lanes_isa_name(i), queues[q],
                                           q == 0 || q == 3 ? plan->queue_sizes[0] : best_q);
                 md_value(f, r ? r->util_op : NAN, "%.4f");
             }
@@ -454,9 +461,7 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
     fprintf(f, "\n## Table 4.3: Ray composition (packet scheme, MAX queue)\n\n"
                "| Scene | Primary | Specular | Shadow | Total Rays |\n|---|---|---|---|---|\n");
     for (int s = 0; s < nscenes; s++) {
-        const char *isa = NULL;
-        for (int i = LANES_ISA_COUNT - 1; i >= 0 && !isa; i--)
-            if (plan->isas[i]) isa = lanes_isa_name((lanes_isa)i);
+        const char *isa = lanes_isa_name(plan->sets[plan->nsets - 1]);
         const study_row *p = find(rows, scenes[s], "primary", "packet", isa, "MAX", best_q);
         const study_row *sp = find(rows, scenes[s], "specular", "packet", isa, "MAX", best_q);
         const study_row *sh = find(rows, scenes[s], "shadow", "packet", isa, "MAX", best_q);
@@ -476,18 +481,16 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
 
     fprintf(f, "\n## Table 4.5: SIMD rendering times (packets; best over queue sizes, size in brackets)\n\n"
                "| Scene |");
-    for (int i = 0; i < LANES_ISA_COUNT; i++)
-        if (plan->isas[i]) fprintf(f, " %s |", i == 0 ? "Single (scalar packets)" : lanes_isa_name((lanes_isa)i));
+    for (int j = 0; j < plan->nsets; j++)
+        fprintf(f, " %s |", plan->sets[j] == LANES_ISA_SCALAR ? "Single (scalar packets)" : lanes_isa_name(plan->sets[j]));
     fprintf(f, "\n|---|");
-    for (int i = 0; i < LANES_ISA_COUNT; i++)
-        if (plan->isas[i]) fprintf(f, "---|");
+    for (int j = 0; j < plan->nsets; j++) fprintf(f, "---|");
     fputc('\n', f);
     for (int s = 0; s < nscenes; s++)
         for (int q = 0; q < 3; q++) {
             fprintf(f, "| %s%s%s |", scenes[s], q ? " " : "", q ? queues[q] : "");
-            for (int i = 0; i < LANES_ISA_COUNT; i++) {
-                if (!plan->isas[i]) continue;
-                const study_row *r = best_packet(rows, scenes[s], lanes_isa_name((lanes_isa)i), queues[q]);
+            for (int j = 0; j < plan->nsets; j++) {
+                const study_row *r = best_packet(rows, scenes[s], lanes_isa_name(plan->sets[j]), queues[q]);
                 if (r && q)
                     fprintf(f, " %.3f (%d) |", r->seconds, r->queue_min);
                 else
@@ -499,22 +502,24 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
     fprintf(f, "\n## Table 4.6: SIMD speedup\n\nS v X: single-ray scalar BVH2 time / packet time at X. "
                "P v X: scalar packet time / packet time at X. W v X: single-ray scalar BVH2 / single-ray wide BVH at X.\n\n"
                "| Scene |");
-    for (int i = 1; i < LANES_ISA_COUNT; i++)
-        if (plan->isas[i]) fprintf(f, " S v %s | P v %s | W v %s |", lanes_isa_name((lanes_isa)i),
-                                   lanes_isa_name((lanes_isa)i), lanes_isa_name((lanes_isa)i));
+    for (int j = 0; j < plan->nsets; j++) {
+        const char *name = lanes_isa_name(plan->sets[j]);
+        if (plan->sets[j] != LANES_ISA_SCALAR) fprintf(f, " S v %s | P v %s | W v %s |", name, name, name);
+    }
     fprintf(f, "\n|---|");
-    for (int i = 1; i < LANES_ISA_COUNT; i++)
-        if (plan->isas[i]) fprintf(f, "---|---|---|");
+    for (int j = 0; j < plan->nsets; j++)
+        if (plan->sets[j] != LANES_ISA_SCALAR) fprintf(f, "---|---|---|");
     fputc('\n', f);
     for (int s = 0; s < nscenes; s++)
         for (int q = 0; q < 3; q++) {
             const study_row *single = find(rows, scenes[s], "all", "single", "scalar", NULL, -1);
             const study_row *scalar_p = best_packet(rows, scenes[s], "scalar", queues[q]);
             fprintf(f, "| %s%s%s |", scenes[s], q ? " " : "", q ? queues[q] : "");
-            for (int i = 1; i < LANES_ISA_COUNT; i++) {
-                if (!plan->isas[i]) continue;
-                const study_row *p = best_packet(rows, scenes[s], lanes_isa_name((lanes_isa)i), queues[q]);
-                const study_row *w = find(rows, scenes[s], "all", "wide", lanes_isa_name((lanes_isa)i), NULL, -1);
+            for (int j = 0; j < plan->nsets; j++) {
+                lanes_isa i = plan->sets[j];
+                if (i == LANES_ISA_SCALAR) continue;
+                const study_row *p = best_packet(rows, scenes[s], lanes_isa_name(i), queues[q]);
+                const study_row *w = find(rows, scenes[s], "all", "wide", lanes_isa_name(i), NULL, -1);
                 md_value(f, single && p ? single->seconds / p->seconds : NAN, "%.2f");
                 md_value(f, scalar_p && p ? scalar_p->seconds / p->seconds : NAN, "%.2f");
                 md_value(f, single && w ? single->seconds / w->seconds : NAN, "%.2f");
@@ -533,16 +538,62 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
         fprintf(f, "| %s | %s | %s | %.2f |\n", r->scene, r->scheme, r->isa, r->mrays);
     }
 
+    /* Width against instruction set: the sets of one family at each width. */
+    int widths[LANES_ISA_COUNT], nwidths = 0;
+    const char *families[LANES_ISA_COUNT];
+    int nfamilies = 0;
+    for (int j = 0; j < plan->nsets; j++) {
+        int w = lanes_isa_lanes(plan->sets[j]);
+        const char *fam = lanes_isa_family(plan->sets[j]);
+        bool seen_w = false, seen_f = false;
+        for (int k = 0; k < nwidths; k++) seen_w = seen_w || widths[k] == w;
+        for (int k = 0; k < nfamilies; k++) seen_f = seen_f || strcmp(families[k], fam) == 0;
+        if (!seen_w) widths[nwidths++] = w;
+        if (!seen_f) families[nfamilies++] = fam;
+    }
+    for (int a = 1; a < nwidths; a++) /* ascending */
+        for (int b = a; b > 0 && widths[b] < widths[b - 1]; b--) {
+            int t = widths[b];
+            widths[b] = widths[b - 1];
+            widths[b - 1] = t;
+        }
+    fprintf(f, "\n## Width against instruction set (render seconds: packets with the MAX queue / single ray on "
+               "the wide BVH)\n\nOne row per instruction-set family: along a row the width changes and the "
+               "instruction set stays; down a column the instruction set changes and the width stays. "
+               "* marks a width emulated with narrower vectors.\n\n| Scene | family |");
+    for (int k = 0; k < nwidths; k++) fprintf(f, " %d lane%s |", widths[k], widths[k] == 1 ? "" : "s");
+    fprintf(f, "\n|---|---|");
+    for (int k = 0; k < nwidths; k++) fprintf(f, "---|");
+    fputc('\n', f);
+    for (int s = 0; s < nscenes; s++)
+        for (int k = 0; k < nfamilies; k++) {
+            fprintf(f, "| %s | %s |", scenes[s], families[k]);
+            for (int w = 0; w < nwidths; w++) {
+                lanes_isa isa = LANES_ISA_NONE;
+                for (int j = 0; j < plan->nsets; j++)
+                    if (lanes_isa_lanes(plan->sets[j]) == widths[w] && strcmp(lanes_isa_family(plan->sets[j]), families[k]) == 0)
+                        isa = plan->sets[j];
+                const study_row *p = isa == LANES_ISA_NONE ? NULL : best_packet(rows, scenes[s], lanes_isa_name(isa), "MAX");
+                const study_row *wd = isa == LANES_ISA_NONE ? NULL : find(rows, scenes[s], "all", "wide", lanes_isa_name(isa), NULL, -1);
+                if (!p || !wd)
+                    fprintf(f, " |");
+                else
+                    fprintf(f, " %.3f / %.3f (%s%s) |", p->seconds, wd->seconds, lanes_isa_name(isa),
+                            lanes_isa_emulated(isa) ? "*" : "");
+            }
+            fputc('\n', f);
+        }
+
     fprintf(f, "\n## Live rays per visited node (Bikker 2012, Table 2 measure; packet scheme, MAX queue %d)\n\n"
                "| Scene | ISA | Rays | Interior | Leaf |\n|---|---|---|---|---|\n", best_q);
     for (int s = 0; s < nscenes; s++)
-        for (int i = 0; i < LANES_ISA_COUNT; i++) {
-            if (!plan->isas[i]) continue;
+        for (int j = 0; j < plan->nsets; j++) {
+            lanes_isa i = plan->sets[j];
             for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
                 const study_row *r = find(rows, scenes[s], lanes_ray_type_name((lanes_ray_type)t), "packet",
-                                          lanes_isa_name((lanes_isa)i), "MAX", best_q);
+                                          lanes_isa_name(i), "MAX", best_q);
                 if (!r || isnan(r->live_node)) continue;
-                fprintf(f, "| %s | %s | %s | %.1f | %.1f |\n", scenes[s], lanes_isa_name((lanes_isa)i), r->rays,
+                fprintf(f, "| %s | %s | %s | %.1f | %.1f |\n", scenes[s], lanes_isa_name(i), r->rays,
                         r->live_node, r->live_leaf);
             }
         }
@@ -572,38 +623,74 @@ static void write_plots(const char *dir, const row_list *rows, char scenes[][64]
     char script[16384];
     for (int s = 0; s < nscenes; s++) {
         const char *sc = scenes[s];
-        /* utilisation vs lanes per ray type, MAX queue at the first queue size */
+        /* utilisation vs lanes per ray type, MAX queue at the first queue
+         * size: one point per width (the first set of that width: the sets
+         * of one width run one algorithm and differ only in rounding;
+         * tables.md has each one) */
         snprintf(script, sizeof script,
                  "set datafile separator ','\nset terminal pngcairo size 800,500\n"
                  "set output 'util_vs_lanes_%s.png'\nset title 'SIMD utilization vs lanes: %s (packets, MAX queue %d)'\n"
                  "set xlabel 'lanes'\nset ylabel 'SIMD utilization (live lanes / lane slots)'\nset yrange [0:1.05]\nset logscale x 2\n"
                  "set key bottom left\n"
-                 "f(t)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"%%s\\\" && $3==\\\"packet\\\" && $6==\\\"MAX\\\" && $7==%d && $4!=\\\"avx512emu\\\"' measurements.csv | sort -t, -k5n\", t)\n"
+                 "f(t)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"%%s\\\" && $3==\\\"packet\\\" && $6==\\\"MAX\\\" && $7==%d && !seen[$5]++' measurements.csv | sort -t, -k5n\", t)\n"
                  "plot for [t in 'primary shadow specular all'] f(t) using 5:9 with linespoints title t\n",
                  sc, sc, plan->queue_sizes[0], sc, plan->queue_sizes[0]);
         char name[1200];
         snprintf(name, sizeof name, "util_vs_lanes_%s.gp", sc);
         if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
 
-        /* speedup over the scalar single-ray BVH2 vs lanes */
-        snprintf(script, sizeof script,
-                 "set datafile separator ','\nset terminal pngcairo size 800,500\n"
-                 "set output 'speedup_vs_lanes_%s.png'\nset title 'Speedup over scalar single-ray: %s'\n"
-                 "set xlabel 'lanes'\nset ylabel 'speedup'\nset logscale x 2\nset key top left\n"
-                 "base=system(\"awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"single\\\" && $4==\\\"scalar\\\" {print $11}' measurements.csv\")+0\n"
-                 "f(s,q)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"%%s\\\" && ($6==\\\"%%s\\\") && ($7==%d || $7==0) && $4!=\\\"avx512emu\\\"' measurements.csv | sort -t, -k5n\", s, q)\n"
-                 "plot f('packet','MAX') using 5:(base/$11) with linespoints title 'packets (MAX queue)', "
-                 "f('ranged','MAX') using 5:(base/$11) with linespoints title 'ranged packets', "
-                 "f('wide','none') using 5:(base/$11) with linespoints title 'single ray, wide BVH'\n",
-                 sc, sc, sc, sc, plan->queue_sizes[0]);
+        /* speedup over the scalar single-ray BVH2 vs lanes: one panel per
+         * method, one series per instruction-set family (x = lanes), so
+         * the width's effect reads along a series and the instruction
+         * set's across series at one x; emulated widths ringed */
+        int used = snprintf(script, sizeof script,
+                            "set datafile separator ','\nset terminal pngcairo size 1500,560\n"
+                            "set output 'speedup_vs_lanes_%s.png'\n"
+                            "set multiplot layout 1,3 title 'Speedup over scalar single-ray: %s (one series per instruction-set family)'\n"
+                            "set xlabel 'lanes'\nset ylabel 'speedup'\nset logscale x 2\nset xrange [0.8:20]\nset yrange [0:*]\n"
+                            "set key below horizontal maxcols 3\n"
+                            "base=system(\"awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"single\\\" && $4==\\\"scalar\\\" {print $11}' measurements.csv\")+0\n"
+                            "f(s,q,fam,emu)=sprintf(\"< awk -F, '$1==\\\"%s\\\" && $2==\\\"all\\\" && $3==\\\"%%s\\\" && ($6==\\\"%%s\\\") && ($7==%d || $7==0) && $17==\\\"%%s\\\" && $18 >= %%d' measurements.csv | sort -t, -k5n\", s, q, fam, emu)\n",
+                            sc, sc, sc, sc, plan->queue_sizes[0]);
+        static const char *const methods[][3] = {{"packet", "MAX", "packets (MAX queue)"},
+                                                 {"ranged", "MAX", "ranged packets"},
+                                                 {"wide", "none", "single ray, wide BVH"}};
+        const char *families[LANES_ISA_COUNT];
+        int nfamilies = 0;
+        bool any_emulated = false;
+        for (int j = 0; j < plan->nsets; j++) {
+            const char *fam = lanes_isa_family(plan->sets[j]);
+            bool seen = false;
+            for (int k = 0; k < nfamilies; k++) seen = seen || strcmp(families[k], fam) == 0;
+            if (!seen) families[nfamilies++] = fam;
+            any_emulated = any_emulated || lanes_isa_emulated(plan->sets[j]);
+        }
+        for (int m = 0; m < 3 && used > 0 && (size_t)used < sizeof script; m++) {
+            used += snprintf(script + used, sizeof script - (size_t)used, "set title '%s'\nplot ", methods[m][2]);
+            for (int k = 0; k < nfamilies && used > 0 && (size_t)used < sizeof script; k++)
+                used += snprintf(script + used, sizeof script - (size_t)used,
+                                 "%sf('%s','%s','%s',0) using 5:(base/$11) with linespoints lw 2 title '%s'",
+                                 k ? ", " : "", methods[m][0], methods[m][1], families[k], families[k]);
+            for (int k = 0; any_emulated && k < nfamilies && used > 0 && (size_t)used < sizeof script; k++) {
+                bool has = false;
+                for (int j = 0; j < plan->nsets; j++)
+                    has = has || (lanes_isa_emulated(plan->sets[j]) && strcmp(lanes_isa_family(plan->sets[j]), families[k]) == 0);
+                if (has)
+                    used += snprintf(script + used, sizeof script - (size_t)used,
+                                     ", f('%s','%s','%s',1) using 5:(base/$11) with points pt 6 ps 3 lc rgb 'black' title '%s: emulated width'",
+                                     methods[m][0], methods[m][1], families[k], families[k]);
+            }
+            if (used > 0 && (size_t)used < sizeof script) used += snprintf(script + used, sizeof script - (size_t)used, "\n");
+        }
+        if (used > 0 && (size_t)used < sizeof script) snprintf(script + used, sizeof script - (size_t)used, "unset multiplot\n");
         snprintf(name, sizeof name, "speedup_vs_lanes_%s.gp", sc);
         if (!run_gnuplot(dir, name, script)) fprintf(report, "plots: gnuplot failed on %s (see gnuplot.log)\n", name);
 
         /* packet size histograms per ray type at the widest native set;
          * only the ray types the scene has (gnuplot fails on empty data) */
         const char *isa = NULL;
-        for (int i = LANES_ISA_COUNT - 1; i >= 0 && !isa; i--)
-            if (plan->isas[i] && i != LANES_ISA_AVX512EMU) isa = lanes_isa_name((lanes_isa)i);
+        for (int j = plan->nsets - 1; j >= 0 && !isa; j--)
+            if (!lanes_isa_emulated(plan->sets[j])) isa = lanes_isa_name(plan->sets[j]);
         const char *types[LANES_RAY_TYPE_COUNT];
         int ntypes = 0;
         for (int t = 0; t < LANES_RAY_TYPE_COUNT; t++) {
@@ -612,7 +699,7 @@ static void write_plots(const char *dir, const row_list *rows, char scenes[][64]
             if (r && r->ray_count > 0) types[ntypes++] = lanes_ray_type_name((lanes_ray_type)t);
         }
         if (ntypes > 0) {
-            int used = snprintf(script, sizeof script,
+            used = snprintf(script, sizeof script,
                                 "set datafile separator ','\nset terminal pngcairo size %d,400\n"
                                 "set output 'packet_sizes_%s.png'\nset multiplot layout 1,%d title 'Rays per packet: %s (%s, MAX queue %d)'\n"
                                 "set style fill solid\nset xlabel 'rays in packet'\nset ylabel 'packets'\nset xrange [0:%d]\n"
@@ -700,16 +787,19 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         }
     }
     if (nspecs == 0) scene_specs[nspecs++] = "default";
-    /* --isa narrows the study to scalar (the baseline) plus that set */
-    for (int i = 0; i < LANES_ISA_COUNT; i++) {
-        lanes_isa isa = (lanes_isa)i;
-        plan.isas[i] = lanes_isa_supported(isa) &&
-                       (ctx->forced_isa == LANES_ISA_NONE || isa == ctx->forced_isa || isa == LANES_ISA_SCALAR);
+    /* Every set this CPU runs, scalar first, in rising rank (a width's
+     * sets side by side); --isa narrows it to scalar (the baseline) plus
+     * that set. */
+    const lanes_isa *ranked = lanes_isa_ranked();
+    for (int i = LANES_ISA_COUNT - 1; i >= 0; i--) {
+        lanes_isa isa = ranked[i];
+        if (lanes_isa_supported(isa) &&
+            (ctx->forced_isa == LANES_ISA_NONE || isa == ctx->forced_isa || isa == LANES_ISA_SCALAR))
+            plan.sets[plan.nsets++] = isa;
     }
     cli_make_dirs("study", out_dir);
 
-    int nisa = 0;
-    for (int i = 0; i < LANES_ISA_COUNT; i++) nisa += plan.isas[i];
+    int nisa = plan.nsets;
     /* per scene: single scalar + wide per ISA + ranged per ISA + packet none + packet MAX/CORNER per size */
     progress_bar.total = nspecs * (1 + nisa + nisa + nisa * (2 + 2 * plan.queue_size_count));
 #ifdef LANES_HAVE_COMPARE
@@ -741,9 +831,8 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         by_width[4] = &accel4, by_width[8] = &accel8, by_width[16] = &accel16;
 
         measure_single(&rows, &scene, &accel4, LANES_ISA_SCALAR, LANES_SCHEME_SINGLE, &plan);
-        for (int i = 0; i < LANES_ISA_COUNT; i++) {
-            if (!plan.isas[i]) continue;
-            lanes_isa isa = (lanes_isa)i;
+        for (int j = 0; j < plan.nsets; j++) {
+            lanes_isa isa = plan.sets[j];
             const lanes_kernels *k = lanes_kernels_for(isa);
             measure_single(&rows, &scene, by_width[k->wide_width], isa, LANES_SCHEME_WIDE, &plan);
             measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_RANGED, LANES_QUEUE_MAX, plan.queue_sizes[0],

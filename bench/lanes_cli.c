@@ -56,7 +56,7 @@ static const cli_command root = {
         "       lanes help [command]\n"
         "\n"
         "global options (before or after the command):\n"
-        "  --isa NAME       run instruction set NAME: scalar, sse4, avx, avx2, avx512emu, avx512\n"
+        "  --isa NAME       run instruction set NAME: " CLI_ISA_NAMES "\n"
         "                   (an unknown name or a set this CPU cannot run is an error)\n"
         "  -h, --help       this text; 'lanes <command> --help' for a command's options\n"
         "\n"

@@ -14,15 +14,17 @@ install(FILES ${PROJECT_SOURCE_DIR}/include/lanes/lanes.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lanes)
 # The SIMD layer (lanes::simd) and the helper that compiles a project's own
 # sources once per kernel set (lanes_add_kernel_sets, in LanesIsa.cmake).
-install(FILES ${PROJECT_SOURCE_DIR}/simd/simd.h ${PROJECT_SOURCE_DIR}/simd/vec1_scalar.h
-              ${PROJECT_SOURCE_DIR}/simd/vec4_sse4.h ${PROJECT_SOURCE_DIR}/simd/vec8_avx.h
-              ${PROJECT_SOURCE_DIR}/simd/vec16_avx512emu.h ${PROJECT_SOURCE_DIR}/simd/vec16_avx512.h
+# simd/isa.h is internal (CPU features); every other header there is public.
+file(GLOB lanes_simd_backends ${PROJECT_SOURCE_DIR}/simd/vec*.h)
+install(FILES ${PROJECT_SOURCE_DIR}/simd/simd.h ${PROJECT_SOURCE_DIR}/simd/kernel_sets.h
+              ${lanes_simd_backends}
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lanes/simd)
 install(FILES ${PROJECT_SOURCE_DIR}/cmake/LanesIsa.cmake DESTINATION ${LANES_INSTALL_CMAKEDIR})
 install(EXPORT lanesTargets NAMESPACE lanes:: DESTINATION ${LANES_INSTALL_CMAKEDIR})
 
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/lanesConfig.cmake.in
-  ${PROJECT_BINARY_DIR}/lanesConfig.cmake INSTALL_DESTINATION ${LANES_INSTALL_CMAKEDIR})
+  ${PROJECT_BINARY_DIR}/lanesConfig.cmake INSTALL_DESTINATION ${LANES_INSTALL_CMAKEDIR}
+  PATH_VARS CMAKE_INSTALL_INCLUDEDIR)
 # 0.x: a minor version may change the API.
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/lanesConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)

@@ -10,52 +10,42 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const isa_names[LANES_ISA_COUNT] = {
-    "scalar", "sse4", "avx", "avx2", "avx512emu", "avx512",
-};
-static const int isa_lanes[LANES_ISA_COUNT] = {1, 4, 8, 8, 16, 16};
+/* The generated list of the sets this build compiled (CMake writes it from
+ * LANES_ISAS and what the compiler could build). */
+#include "lanes_built_sets.h"
 
-#define NEEDS_SSE4 (LANES_CPU_SSE2 | LANES_CPU_SSE41 | LANES_CPU_POPCNT)
-#define NEEDS_AVX (NEEDS_SSE4 | LANES_CPU_OSXSAVE | LANES_CPU_AVX)
-#define NEEDS_AVX2 (NEEDS_AVX | LANES_CPU_AVX2 | LANES_CPU_FMA)
-#define NEEDS_AVX512                                                                       \
-    (NEEDS_AVX2 | LANES_CPU_AVX512F | LANES_CPU_AVX512DQ | LANES_CPU_AVX512BW | LANES_CPU_AVX512VL)
-static const uint32_t isa_needs[LANES_ISA_COUNT] = {
-    LANES_CPU_SSE2, NEEDS_SSE4, NEEDS_AVX, NEEDS_AVX2, NEEDS_AVX2, NEEDS_AVX512,
+typedef struct isa_row {
+    const char *name, *family;
+    int lanes, rank;
+    bool emulated, automatic;
+    uint32_t needs;
+} isa_row;
+
+static const isa_row rows[LANES_ISA_COUNT] = {
+#define ROW(id, nm, ln, fam, emu, rk, au, nd) [LANES_ISA_##id] = {#nm, #fam, ln, rk, emu, au, nd},
+    LANES_KERNEL_SETS(ROW)
+#undef ROW
 };
 
-/* Set by CMake for every set that configured and built (LANES_ISAS). */
 static const bool isa_compiled[LANES_ISA_COUNT] = {
-#ifdef LANES_HAVE_KSET_SCALAR
-    [LANES_ISA_SCALAR] = true,
-#endif
-#ifdef LANES_HAVE_KSET_SSE4
-    [LANES_ISA_SSE4] = true,
-#endif
-#ifdef LANES_HAVE_KSET_AVX
-    [LANES_ISA_AVX] = true,
-#endif
-#ifdef LANES_HAVE_KSET_AVX2
-    [LANES_ISA_AVX2] = true,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512EMU
-    [LANES_ISA_AVX512EMU] = true,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512
-    [LANES_ISA_AVX512] = true,
-#endif
+#define BUILT(id, name) [LANES_ISA_##id] = true,
+    LANES_BUILT_SETS(BUILT)
+#undef BUILT
 };
 
 static bool valid(lanes_isa isa) { return isa >= 0 && isa < LANES_ISA_COUNT; }
 
-const char *lanes_isa_name(lanes_isa isa) { return valid(isa) ? isa_names[isa] : "none"; }
-int lanes_isa_lanes(lanes_isa isa) { return valid(isa) ? isa_lanes[isa] : 0; }
-uint32_t lanes_isa_required_features(lanes_isa isa) { return valid(isa) ? isa_needs[isa] : 0; }
+const char *lanes_isa_name(lanes_isa isa) { return valid(isa) ? rows[isa].name : "none"; }
+int lanes_isa_lanes(lanes_isa isa) { return valid(isa) ? rows[isa].lanes : 0; }
+const char *lanes_isa_family(lanes_isa isa) { return valid(isa) ? rows[isa].family : "none"; }
+bool lanes_isa_emulated(lanes_isa isa) { return valid(isa) && rows[isa].emulated; }
+bool lanes_isa_automatic(lanes_isa isa) { return valid(isa) && rows[isa].automatic; }
+uint32_t lanes_isa_required_features(lanes_isa isa) { return valid(isa) ? rows[isa].needs : 0; }
 bool lanes_isa_compiled(lanes_isa isa) { return valid(isa) && isa_compiled[isa]; }
 
 bool lanes_isa_cpu_can_run(lanes_isa isa)
 {
-    return valid(isa) && (lanes_cpu()->bits & isa_needs[isa]) == isa_needs[isa];
+    return valid(isa) && (lanes_cpu()->bits & rows[isa].needs) == rows[isa].needs;
 }
 
 bool lanes_isa_supported(lanes_isa isa) { return lanes_isa_compiled(isa) && lanes_isa_cpu_can_run(isa); }
@@ -63,15 +53,47 @@ bool lanes_isa_supported(lanes_isa isa) { return lanes_isa_compiled(isa) && lane
 lanes_isa lanes_isa_from_name(const char *name)
 {
     for (int i = 0; name && i < LANES_ISA_COUNT; i++)
-        if (strcmp(name, isa_names[i]) == 0) return (lanes_isa)i;
+        if (strcmp(name, rows[i].name) == 0) return (lanes_isa)i;
     return LANES_ISA_NONE;
 }
 
-const char *lanes_isa_all_names(void) { return "scalar, sse4, avx, avx2, avx512emu, avx512"; }
+/* Derived once from the table: the names for messages and the order of
+ * preference. */
+static pthread_once_t derived_once = PTHREAD_ONCE_INIT;
+static char all_names[LANES_ISA_COUNT * 16];
+static lanes_isa ranked[LANES_ISA_COUNT];
+
+static void derive(void)
+{
+    size_t used = 0;
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        int n = snprintf(all_names + used, sizeof all_names - used, "%s%s", i ? ", " : "", rows[i].name);
+        if (n > 0 && (size_t)n < sizeof all_names - used) used += (size_t)n;
+        ranked[i] = (lanes_isa)i;
+    }
+    for (int i = 1; i < LANES_ISA_COUNT; i++) /* insertion sort, best rank first */
+        for (int j = i; j > 0 && rows[ranked[j]].rank > rows[ranked[j - 1]].rank; j--) {
+            lanes_isa t = ranked[j];
+            ranked[j] = ranked[j - 1];
+            ranked[j - 1] = t;
+        }
+}
+
+const char *lanes_isa_all_names(void)
+{
+    pthread_once(&derived_once, derive);
+    return all_names;
+}
+
+const lanes_isa *lanes_isa_ranked(void)
+{
+    pthread_once(&derived_once, derive);
+    return ranked;
+}
 
 /* The active set and the cap, as atomics: read on every kernel-table lookup. */
 static _Atomic int current_isa = LANES_ISA_NONE;
-static _Atomic int max_isa = LANES_ISA_COUNT - 1;
+static _Atomic int max_isa = LANES_ISA_NONE; /* NONE: no cap */
 static pthread_once_t env_once = PTHREAD_ONCE_INIT;
 static lanes_status env_status = LANES_OK;
 static char env_message[384];
@@ -81,14 +103,20 @@ static void set_message(char *message, size_t size, const char *text)
     if (message && size) snprintf(message, size, "%s", text);
 }
 
-static lanes_isa best_below(int cap)
+/* The best-ranked automatic set the build has and the CPU runs, ranked at
+ * most as high as the cap. */
+static lanes_isa best_below(lanes_isa cap)
 {
-    for (int i = cap; i >= 0; i--)
-        if (i != LANES_ISA_AVX512EMU && lanes_isa_supported((lanes_isa)i)) return (lanes_isa)i;
+    const lanes_isa *order = lanes_isa_ranked();
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = order[i];
+        if (valid(cap) && rows[isa].rank > rows[cap].rank) continue;
+        if (rows[isa].automatic && lanes_isa_supported(isa)) return isa;
+    }
     return LANES_ISA_SCALAR;
 }
 
-lanes_isa lanes_isa_best(void) { return best_below(atomic_load(&max_isa)); }
+lanes_isa lanes_isa_best(void) { return best_below((lanes_isa)atomic_load(&max_isa)); }
 
 /* Why a set cannot run here, naming the missing features at the first level
  * that lacks one (CPU, then OS, then the disable switch). */
@@ -100,12 +128,12 @@ lanes_status lanes_isa_check(lanes_isa isa, char *why, size_t size)
     }
     if (!isa_compiled[isa]) {
         snprintf(why, size, "instruction set '%s' was not compiled into this build (see LANES_ISAS)",
-                 isa_names[isa]);
+                 rows[isa].name);
         return LANES_ERR_NOT_COMPILED;
     }
     char reason[160];
-    if (lanes_cpu_explain_missing(lanes_cpu(), isa_needs[isa], reason, sizeof reason)) {
-        snprintf(why, size, "instruction set '%s' cannot run on this CPU: %s", isa_names[isa],
+    if (lanes_cpu_explain_missing(lanes_cpu(), rows[isa].needs, reason, sizeof reason)) {
+        snprintf(why, size, "instruction set '%s' cannot run on this CPU: %s", rows[isa].name,
                  reason);
         return LANES_ERR_CPU_LACKS;
     }

@@ -15,66 +15,24 @@
 #define LANES_CAT_(a, b) a##b
 #define LANES_CAT(a, b) LANES_CAT_(a, b)
 
-#if defined(LANES_KSET_SCALAR)
-#include "vec1_scalar.h"
-#define LANES_W 1
-#define LANES_VPREFIX v1
-#define LANES_SUFFIX _scalar
-#define LANES_KSET_NAME "scalar"
-#define LANES_THIS_ISA LANES_ISA_SCALAR
-#elif defined(LANES_KSET_SSE4)
-#if !defined(__SSE4_1__) || !defined(__POPCNT__)
-#error "the sse4 set needs -msse4.1 -mpopcnt"
+#define LANES_STR_(a) #a
+#define LANES_STR(a) LANES_STR_(a)
+
+/* lanes_add_kernel_sets (cmake/LanesIsa.cmake) defines, from the set's row
+ * in kernel_sets.h and its CMake flags: LANES_KSET_ID (AVX2),
+ * LANES_KSET_TOKEN (avx2), LANES_KSET_LANES (8) and LANES_KSET_HEADER (the
+ * backend, "vec8_avx.h"). Each backend checks that the compiler flags give
+ * it what it needs. */
+#if !defined(LANES_KSET_ID) || !defined(LANES_KSET_TOKEN) || !defined(LANES_KSET_LANES) ||   \
+    !defined(LANES_KSET_HEADER)
+#error "compile per-ISA sources with lanes_add_kernel_sets (cmake/LanesIsa.cmake)"
 #endif
-#include "vec4_sse4.h"
-#define LANES_W 4
-#define LANES_VPREFIX v4
-#define LANES_SUFFIX _sse4
-#define LANES_KSET_NAME "sse4"
-#define LANES_THIS_ISA LANES_ISA_SSE4
-#elif defined(LANES_KSET_AVX)
-#if !defined(__AVX__) || defined(__AVX2__) || defined(__FMA__)
-#error "the avx set needs -mavx and neither AVX2 nor FMA"
-#endif
-#include "vec8_avx.h"
-#define LANES_W 8
-#define LANES_VPREFIX v8
-#define LANES_SUFFIX _avx
-#define LANES_KSET_NAME "avx"
-#define LANES_THIS_ISA LANES_ISA_AVX
-#elif defined(LANES_KSET_AVX2)
-#if !defined(__AVX2__) || !defined(__FMA__) || defined(__AVX512F__)
-#error "the avx2 set needs -mavx2 -mfma and no AVX-512"
-#endif
-#include "vec8_avx.h"
-#define LANES_W 8
-#define LANES_VPREFIX v8
-#define LANES_SUFFIX _avx2
-#define LANES_KSET_NAME "avx2"
-#define LANES_THIS_ISA LANES_ISA_AVX2
-#elif defined(LANES_KSET_AVX512EMU)
-#if !defined(__AVX2__) || !defined(__FMA__) || defined(__AVX512F__)
-#error "the avx512emu set needs -mavx2 -mfma and no AVX-512"
-#endif
-#include "vec16_avx512emu.h"
-#define LANES_W 16
-#define LANES_VPREFIX v16
-#define LANES_SUFFIX _avx512emu
-#define LANES_KSET_NAME "avx512emu"
-#define LANES_THIS_ISA LANES_ISA_AVX512EMU
-#elif defined(LANES_KSET_AVX512)
-#if !defined(__AVX512F__) || !defined(__AVX512DQ__) || !defined(__AVX512BW__) || !defined(__AVX512VL__)
-#error "the avx512 set needs -mavx512f -mavx512dq -mavx512bw -mavx512vl"
-#endif
-#include "vec16_avx512.h"
-#define LANES_W 16
-#define LANES_VPREFIX v16
-#define LANES_SUFFIX _avx512
-#define LANES_KSET_NAME "avx512"
-#define LANES_THIS_ISA LANES_ISA_AVX512
-#else
-#error "compile per-ISA sources with one LANES_KSET_<SET> defined"
-#endif
+#include LANES_KSET_HEADER
+#define LANES_W LANES_KSET_LANES
+#define LANES_VPREFIX LANES_CAT(v, LANES_KSET_LANES)
+#define LANES_SUFFIX LANES_CAT(_, LANES_KSET_TOKEN)
+#define LANES_KSET_NAME LANES_STR(LANES_KSET_TOKEN)
+#define LANES_THIS_ISA LANES_CAT(LANES_ISA_, LANES_KSET_ID)
 
 #define LANES_FN(name) LANES_CAT(name, LANES_SUFFIX)
 #define LANES_VOP(op) LANES_CAT(LANES_VPREFIX, op)

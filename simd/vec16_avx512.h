@@ -3,6 +3,10 @@
 #ifndef LANES_SIMD_VEC16_AVX512_H
 #define LANES_SIMD_VEC16_AVX512_H
 
+#if !defined(__AVX512F__) || !defined(__AVX512DQ__) || !defined(__AVX512BW__) || !defined(__AVX512VL__)
+#error "vec16_avx512.h needs -mavx512f -mavx512dq -mavx512bw -mavx512vl"
+#endif
+
 #include <stdbool.h>
 #include <stdint.h>
 #include <immintrin.h>

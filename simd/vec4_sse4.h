@@ -5,6 +5,10 @@
 #ifndef LANES_SIMD_VEC4_SSE4_H
 #define LANES_SIMD_VEC4_SSE4_H
 
+#if !defined(__SSE4_1__) || !defined(__POPCNT__)
+#error "vec4_sse4.h needs -msse4.1 -mpopcnt"
+#endif
+
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>

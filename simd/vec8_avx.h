@@ -9,6 +9,10 @@
 #ifndef LANES_SIMD_VEC8_AVX_H
 #define LANES_SIMD_VEC8_AVX_H
 
+#if !defined(__AVX__)
+#error "vec8_avx.h needs -mavx (and, for the avx2 set, -mavx2 -mfma)"
+#endif
+
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>

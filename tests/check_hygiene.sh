@@ -17,6 +17,10 @@
 #                   sse4      no VEX or EVEX encoding, no ymm/zmm/k register
 #                   avx       no EVEX, zmm or k register, no FMA, no AVX2
 #                   avx2      no EVEX, zmm or k register (no AVX-512)
+#                   avx512emu the same as avx2: 16 lanes from AVX2 halves
+#                   avx512vl8 no zmm register: AVX-512 on ymm only
+#   check_hygiene.sh --levels   prints the isa levels, one per line: the
+#                   kernel sets named here are checked at their own level
 # --expect-violation inverts the verdict: the check must find something. It
 # is how the tests prove this script can fail at all.
 # Exit status: 0 pass, 1 fail, 2 usage error.
@@ -26,6 +30,12 @@ usage() {
     echo "usage: $0 [--expect-violation] symbols SUFFIX|sections -|isa LEVEL OBJECT..." >&2
     exit 2
 }
+
+levels=(baseline sse4 avx avx2 avx512emu avx512vl8)
+if [[ ${1:-} == --levels ]]; then
+    printf '%s\n' "${levels[@]}"
+    exit 0
+fi
 
 expect_violation=0
 if [[ ${1:-} == --expect-violation ]]; then
@@ -84,6 +94,7 @@ isa)
     evex='^((2e|3e|26|36|64|65|67) )*62 '
     wide_regs='%(ymm|zmm)[0-9]+|%k[0-7]'
     avx512_regs='%zmm[0-9]+|%k[0-7]|%[xy]mm(1[6-9]|2[0-9]|3[01])'
+    zmm_regs='%zmm[0-9]+'
     above_sse2='^(pabs[bwd]|palignr|phadd[a-z]*|phsub[a-z]*|pmaddubsw|pmulhrsw|pshufb|psign[bwd]|blendv?p[sd]|dpp[sd]|extractps|insertps|movntdqa|mpsadbw|packusdw|pblendvb|pblendw|pcmpeqq|pextr[bdq]|phminposuw|pinsr[bdq]|pmax(sb|sd|ud|uw)|pmin(sb|sd|ud|uw)|pmov[sz]x[a-z]*|pmuldq|pmulld|ptest|round[ps][sd]|pcmp[ei]str[im]|pcmpgtq|crc32[a-z]*|popcnt[a-z]*)( |$)'
     above_sse41='^(pcmp[ei]str[im]|pcmpgtq|crc32[a-z]*)( |$)'
     fma='^(vf(n)?m(add|sub|addsub|subadd)[0-9a-z]*)( |$)'
@@ -95,18 +106,20 @@ isa)
     baseline) rule="wide_regs vex evex above_sse2" ;;
     sse4) rule="wide_regs vex evex above_sse41" ;;
     avx) rule="avx512_regs evex fma avx2_only avx_int256" ;;
-    avx2) rule="avx512_regs evex" ;;
+    avx2 | avx512emu) rule="avx512_regs evex" ;;
+    avx512vl8) rule="zmm_regs" ;;
     *) usage ;;
     esac
     disassemble "${objects[@]}" |
         awk -F'\t' -v rule=" $rule " -v vex="$vex" -v evex="$evex" -v wide_regs="$wide_regs" \
-            -v avx512_regs="$avx512_regs" -v above_sse2="$above_sse2" -v above_sse41="$above_sse41" \
+            -v avx512_regs="$avx512_regs" -v zmm_regs="$zmm_regs" -v above_sse2="$above_sse2" -v above_sse41="$above_sse41" \
             -v fma="$fma" -v avx2_only="$avx2_only" '
             function has(r) { return index(rule, " " r " ") > 0 }
             {
                 bytes = $3; insn = $4; sub(/^ +/, "", insn); why = ""
                 if (has("wide_regs") && insn ~ wide_regs) why = "ymm/zmm/k register"
                 else if (has("avx512_regs") && insn ~ avx512_regs) why = "AVX-512 register"
+                else if (has("zmm_regs") && insn ~ zmm_regs) why = "zmm register"
                 else if (has("evex") && bytes ~ evex) why = "EVEX (AVX-512) encoding"
                 else if (has("vex") && bytes ~ vex) why = "VEX (AVX/BMI) encoding"
                 else if (has("above_sse2") && insn ~ above_sse2) why = "above the x86-64 baseline"

@@ -1,8 +1,8 @@
 # The tests' own view of which kernel set a CPU can run, shared by the
 # check_*.cmake scripts (include()d, after they have read their -D options).
 #
-# What each set needs is restated here from design.md, not read from
-# simd/isa.c, and what the CPU offers comes from /proc/cpuinfo or from the
+# What each set needs is stated in cmake/LanesIsa.cmake apart from the C
+# table simd/isa.c reads, and what the CPU offers comes from /proc/cpuinfo or from the
 # emulated model's list (FEATURES), never from the detector under test: a slip
 # in the detector or in isa.c shows up as a failure.
 #
@@ -20,19 +20,14 @@
 # fail(), runnable() and lanes_oracle_environment() (sets the program's
 # LANES_* variables: the test's values and the simulation, nothing else).
 
-set(ALL_ISAS scalar sse4 avx avx2 avx512emu avx512)
-set(NEEDS_scalar sse2)
-set(NEEDS_sse4 sse2 sse4.1 popcnt)
-set(NEEDS_avx ${NEEDS_sse4} osxsave avx)
-set(NEEDS_avx2 ${NEEDS_avx} avx2 fma)
-set(NEEDS_avx512emu ${NEEDS_avx2})
-set(NEEDS_avx512 ${NEEDS_avx2} avx512f avx512dq avx512bw avx512vl)
-set(LANES_scalar 1)
-set(LANES_sse4 4)
-set(LANES_avx 8)
-set(LANES_avx2 8)
-set(LANES_avx512emu 16)
-set(LANES_avx512 16)
+# The sets and what each needs: cmake/LanesIsa.cmake, which states the
+# needs apart from simd/kernel_sets.h's C column (the detector's view).
+include(${CMAKE_CURRENT_LIST_DIR}/../cmake/LanesIsa.cmake)
+set(ALL_ISAS ${LANES_ALL_ISAS})
+foreach(isa IN LISTS ALL_ISAS)
+  set(NEEDS_${isa} ${LANES_ISA_NEEDS_${isa}})
+  set(LANES_${isa} ${LANES_ISA_LANES_${isa}})
+endforeach()
 set(ALL_FEATURES sse2 sse3 ssse3 sse4.1 sse4.2 popcnt osxsave avx f16c fma avx2 bmi1 bmi2
     lzcnt avx512f avx512cd avx512dq avx512bw avx512vl)
 

@@ -94,7 +94,8 @@ if(lanes_cli_target)
   # is why avx512 cannot run).
   set(lanes_refusals
       "avx512|avx512f|ENV" "avx512|avx512bw|FLAG" "avx512emu|avx2|ENV" "avx2|avx2|ENV"
-      "avx2|fma|FLAG" "avx|avx|ENV" "avx|osxsave|ENV" "sse4|sse4.1|ENV" "sse4|popcnt|FLAG")
+      "avx2|fma|FLAG" "avx|avx|ENV" "avx|osxsave|ENV" "sse4|sse4.1|ENV" "sse4|popcnt|FLAG"
+      "avx512vl8|avx512vl|FLAG")
   foreach(r IN LISTS lanes_refusals)
     string(REPLACE "|" ";" r "${r}")
     list(GET r 0 isa)
@@ -239,22 +240,21 @@ if(lanes_program_objects)
   message(STATUS "lanes: hygiene.isa.program checks the objects of: ${shown}")
   lanes_hygiene_test(hygiene.isa.program isa baseline ${lanes_program_objects})
 endif()
-if(sse4 IN_LIST LANES_BUILT_ISAS)
-  lanes_hygiene_test(hygiene.isa.sse4 isa sse4 $<TARGET_OBJECTS:lanes_kernels_sse4>)
-endif()
-if(avx IN_LIST LANES_BUILT_ISAS)
-  lanes_hygiene_test(hygiene.isa.avx isa avx $<TARGET_OBJECTS:lanes_kernels_avx>)
-endif()
-foreach(isa IN ITEMS avx2 avx512emu)
-  if(isa IN_LIST LANES_BUILT_ISAS)
-    lanes_hygiene_test(hygiene.isa.${isa} isa avx2 $<TARGET_OBJECTS:lanes_kernels_${isa}>)
+# Every set the script has a level for (its --levels) is checked at it.
+execute_process(COMMAND bash ${LANES_CHECK_HYGIENE} --levels OUTPUT_VARIABLE lanes_hygiene_levels
+                COMMAND_ERROR_IS_FATAL ANY)
+string(REPLACE "\n" ";" lanes_hygiene_levels "${lanes_hygiene_levels}")
+foreach(isa IN LISTS LANES_BUILT_ISAS)
+  if(isa IN_LIST lanes_hygiene_levels)
+    lanes_hygiene_test(hygiene.isa.${isa} isa ${isa} $<TARGET_OBJECTS:lanes_kernels_${isa}>)
   endif()
 endforeach()
 
 # The checks must be able to fail: each one is also run where it has to find
 # something (a wider set's objects, another set's suffix, a constructor).
 set(lanes_hygiene_catches
-    "sse4|baseline" "avx|sse4" "avx2|sse4" "avx2|avx" "avx512|avx2")
+    "sse4|baseline" "avx|sse4" "avx2|sse4" "avx2|avx" "avx512|avx2" "avx512vl8|avx2"
+    "avx512|avx512vl8")
 foreach(pair IN LISTS lanes_hygiene_catches)
   string(REPLACE "|" ";" pair "${pair}")
   list(GET pair 0 wider)

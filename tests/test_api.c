@@ -29,7 +29,6 @@ static long passed, failed;
         }                                                                                  \
     } while (0)
 
-static const char *const set_names[] = {"scalar", "sse4", "avx", "avx2", "avx512emu", "avx512"};
 static const char *const modes[] = {"fast", "default", "robust"};
 
 /* ------------------------------------------------------------- scene */
@@ -399,14 +398,15 @@ static void test_queries(const mesh *m)
     }
     results stream = alloc_results(n), packet = alloc_results(n), one = alloc_results(n);
     int sets_run = 0;
-    for (size_t s = 0; s < sizeof set_names / sizeof set_names[0]; s++) {
+    for (int s = 0; s < LANES_ISA_COUNT; s++) {
+        const char *set_name = lanes_isa_name((lanes_isa)s);
         for (size_t md = 0; md < 3; md++) {
             char config[96];
-            snprintf(config, sizeof config, "isa=%s,accuracy=%s,threads=2", set_names[s], modes[md]);
+            snprintf(config, sizeof config, "isa=%s,accuracy=%s,threads=2", set_name, modes[md]);
             lanes_device d;
             lanes_status st = lanes_device_create(config, &d);
             if (st == LANES_ERR_CPU_LACKS || st == LANES_ERR_NOT_COMPILED) {
-                if (md == 0) printf("SKIP %s: %s\n", set_names[s], lanes_last_error_message());
+                if (md == 0) printf("SKIP %s: %s\n", set_name, lanes_last_error_message());
                 break;
             }
             CHECK(st == LANES_OK, "%s: %s", config, lanes_last_error_message());
@@ -443,7 +443,7 @@ static void test_queries(const mesh *m)
                   dp, d1, op, o1);
             printf("%s %s %s: %zu rays, %zu hits, %zu at an edge or tie differ from brute force; stream, packet "
                    "and single agree\n",
-                   wrong == 0 ? "PASS" : "FAIL", set_names[s], modes[md], n, hits, close_calls);
+                   wrong == 0 ? "PASS" : "FAIL", set_name, modes[md], n, hits, close_calls);
 
             /* Packets of every awkward size, rays beyond 1024 included. */
             size_t sizes[] = {1, 7, 1023, 1024, 1025, 2055};

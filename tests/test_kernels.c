@@ -220,10 +220,17 @@ void tk_hist_print(const tk_hist *h, const char *what)
 
 void tk_family_meta(tk_ctx *c)
 {
-    /* bit 0 SSE4.1, 1 AVX, 2 AVX2, 3 FMA, 4 AVX-512F, as kernels.h defines them;
-     * a set built with the wrong flags would pass every other test while
-     * running different instructions than its name says */
-    static const uint32_t want_features[LANES_ISA_COUNT] = {0u, 1u, 3u, 15u, 15u, 31u};
+    /* bit 0 SSE4.1, 1 AVX, 2 AVX2, 3 FMA, 4 AVX-512F, as kernels.h defines
+     * them: the compiler must have been told exactly what the set's row in
+     * simd/kernel_sets.h says it needs. A set built with the wrong flags
+     * would pass every other test while running different instructions
+     * than its name says. */
+    static const uint32_t feature_of_bit[] = {LANES_CPU_SSE41, LANES_CPU_AVX, LANES_CPU_AVX2,
+                                              LANES_CPU_FMA, LANES_CPU_AVX512F};
+    uint32_t want_features[LANES_ISA_COUNT] = {0};
+    for (int isa = 0; isa < LANES_ISA_COUNT; isa++)
+        for (unsigned b = 0; b < sizeof feature_of_bit / sizeof feature_of_bit[0]; b++)
+            if (lanes_isa_required_features((lanes_isa)isa) & feature_of_bit[b]) want_features[isa] |= 1u << b;
     for (int i = 0; i < c->n_isa; i++) {
         const lanes_kernels *k = c->isa[i];
         tk_group g;

@@ -104,17 +104,18 @@ void tk_band(tk_group *g, const char *fmt, ...) __attribute__((format(printf, 2,
 /* Counts one skipped group and says why. */
 void tk_skip(tk_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-/* Sets with and without FMA: Möller–Trumbore's results are bitwise equal
- * within a group, and differ by rounding between groups. */
+/* Sets with and without FMA (as their rows in simd/kernel_sets.h say):
+ * Möller–Trumbore's results are bitwise equal within a group, and differ by
+ * rounding between groups. */
 static inline int tk_fma_group(lanes_isa isa)
 {
-    return isa == LANES_ISA_AVX2 || isa == LANES_ISA_AVX512EMU || isa == LANES_ISA_AVX512;
+    return (lanes_isa_required_features(isa) & LANES_CPU_FMA) != 0;
 }
 /* Sets with bitwise equal fast reciprocals: RCPPS with a plain Newton step,
  * RCPPS with a fused one, and AVX-512's RCP14. */
 static inline int tk_rcp_group(lanes_isa isa)
 {
-    if (isa == LANES_ISA_AVX512) return 2;
+    if (lanes_isa_required_features(isa) & LANES_CPU_AVX512F) return 2;
     return tk_fma_group(isa);
 }
 

@@ -35,11 +35,15 @@ static void check(bool ok, const char *what)
 
 static lanes_isa isa_of_lanes(int lanes)
 {
-    /* prefer the native set of that width */
-    static const lanes_isa order[] = {LANES_ISA_AVX512, LANES_ISA_AVX512EMU, LANES_ISA_AVX2, LANES_ISA_AVX,
-                                      LANES_ISA_SSE4, LANES_ISA_SCALAR};
-    for (size_t i = 0; i < sizeof order / sizeof order[0]; i++)
-        if (lanes_isa_lanes(order[i]) == lanes && lanes_isa_supported(order[i])) return order[i];
+    /* the best set of that width the automatic choice could make, else
+     * the best of any kind (avx512emu for 16 lanes without AVX-512) */
+    const lanes_isa *ranked = lanes_isa_ranked();
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < LANES_ISA_COUNT; i++) {
+            lanes_isa isa = ranked[i];
+            if (lanes_isa_lanes(isa) == lanes && lanes_isa_supported(isa) && (pass || lanes_isa_automatic(isa)))
+                return isa;
+        }
     return LANES_ISA_NONE;
 }
 

@@ -47,25 +47,16 @@ void simd_end(simd_ctx *c)
 
 typedef void (*run_fn)(simd_ctx *);
 
+#include "test_simd_ops_set_sets.h" /* the sets built: TEST_SIMD_OPS_SET_SETS (generated) */
+
+#define DECLARE(id, name) void test_simd_ops_run_##name(simd_ctx *c);
+TEST_SIMD_OPS_SET_SETS(DECLARE)
+#undef DECLARE
+
 static const run_fn runs[LANES_ISA_COUNT] = {
-#ifdef LANES_HAVE_KSET_SCALAR
-    [LANES_ISA_SCALAR] = test_simd_ops_run_scalar,
-#endif
-#ifdef LANES_HAVE_KSET_SSE4
-    [LANES_ISA_SSE4] = test_simd_ops_run_sse4,
-#endif
-#ifdef LANES_HAVE_KSET_AVX
-    [LANES_ISA_AVX] = test_simd_ops_run_avx,
-#endif
-#ifdef LANES_HAVE_KSET_AVX2
-    [LANES_ISA_AVX2] = test_simd_ops_run_avx2,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512EMU
-    [LANES_ISA_AVX512EMU] = test_simd_ops_run_avx512emu,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512
-    [LANES_ISA_AVX512] = test_simd_ops_run_avx512,
-#endif
+#define ENTRY(id, name) [LANES_ISA_##id] = test_simd_ops_run_##name,
+    TEST_SIMD_OPS_SET_SETS(ENTRY)
+#undef ENTRY
 };
 
 static bool in_list(const char *list, const char *name)

@@ -29,12 +29,11 @@ void simd_begin(simd_ctx *c, const char *op);
 void simd_fail(simd_ctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void simd_end(simd_ctx *c);
 
-/* One per compiled set, defined by test_simd_ops_set.c with the set's suffix. */
-void test_simd_ops_run_scalar(simd_ctx *c);
-void test_simd_ops_run_sse4(simd_ctx *c);
-void test_simd_ops_run_avx(simd_ctx *c);
-void test_simd_ops_run_avx2(simd_ctx *c);
-void test_simd_ops_run_avx512emu(simd_ctx *c);
-void test_simd_ops_run_avx512(simd_ctx *c);
+/* test_simd_ops_run_<set>(simd_ctx *c): one per compiled set, defined by
+ * test_simd_ops_set.c with the set's suffix (declared in test_simd_ops.c
+ * from the generated list of sets). */
+#ifdef LANES_FN
+void LANES_FN(test_simd_ops_run)(simd_ctx *c);
+#endif
 
 #endif

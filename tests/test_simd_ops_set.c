@@ -11,19 +11,18 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "simd/isa.h"
 #include "simd/simd.h"
 #include "test_simd_ops.h"
 
 #define W LANES_W
 #define NMASKS_16 4096
 
-/* Sets whose fmadd is a fused multiply-add, by their name (not by the
- * compiler's flags, which are checked against it). */
-#if defined(LANES_KSET_AVX2) || defined(LANES_KSET_AVX512EMU) || defined(LANES_KSET_AVX512)
-#define EXPECT_FMA 1
-#else
-#define EXPECT_FMA 0
-#endif
+/* What the set's row in simd/kernel_sets.h says it needs (not the
+ * compiler's flags, which are checked against it): a fused fmadd where it
+ * needs FMA, AVX-512's VRCP14PS where it needs AVX-512F. */
+#define EXPECT_FMA ((lanes_isa_required_features(LANES_THIS_ISA) & LANES_CPU_FMA) != 0)
+#define EXPECT_RCP14 ((lanes_isa_required_features(LANES_THIS_ISA) & LANES_CPU_AVX512F) != 0)
 
 static inline uint32_t fbits(float x)
 {
@@ -374,11 +373,8 @@ static void test_fma(simd_ctx *c, rng *r)
         vstore(R3, vf_fnmadd(a, b, cc));
         for (int i = 0; i < W; i++) {
             float x = A[i], y = B[i], z = C[i];
-#if EXPECT_FMA
-            float w1 = fmaf(x, y, z), w2 = fmaf(x, y, -z), w3 = fmaf(-x, y, z);
-#else
             float w1 = x * y + z, w2 = x * y - z, w3 = z - x * y;
-#endif
+            if (EXPECT_FMA) w1 = fmaf(x, y, z), w2 = fmaf(x, y, -z), w3 = fmaf(-x, y, z);
             if (!same(R1[i], w1)) simd_fail(c, "fmadd(%a, %a, %a) = %a, expected %a", (double)x, (double)y, (double)z, (double)R1[i], (double)w1);
             if (!same(R2[i], w2)) simd_fail(c, "fmsub(%a, %a, %a) = %a, expected %a", (double)x, (double)y, (double)z, (double)R2[i], (double)w2);
             if (!same(R3[i], w3)) simd_fail(c, "fnmadd(%a, %a, %a) = %a, expected %a", (double)x, (double)y, (double)z, (double)R3[i], (double)w3);
@@ -436,13 +432,8 @@ static void test_unary(simd_ctx *c, rng *r)
      * relative error, AVX-512's VRCP14PS 2^-14. Both give ±inf for ±0
      * and ±0 for ±inf; RCPPS treats denormal inputs as 0 and flushes
      * denormal results to 0. */
-#if defined(LANES_KSET_AVX512)
-    const double fast_bound = 0x1p-14;
-    const char *fast_name = "rcp_fast (RCP14, 2^-14)";
-#else
-    const double fast_bound = 1.5 * 0x1p-12;
-    const char *fast_name = "rcp_fast (RCPPS, 1.5 * 2^-12)";
-#endif
+    const double fast_bound = EXPECT_RCP14 ? 0x1p-14 : 1.5 * 0x1p-12;
+    const char *fast_name = EXPECT_RCP14 ? "rcp_fast (RCP14, 2^-14)" : "rcp_fast (RCPPS, 1.5 * 2^-12)";
     simd_begin(c, fast_name);
     double worst = 0;
     UNARY_LOOP({
@@ -486,13 +477,7 @@ static void test_unary(simd_ctx *c, rng *r)
      * RCP14 gives e0^2 <= u/16 plus the FMA step's rounding. Measured on an
      * AMD EPYC: 3.37u, 2.58u and 1.02u; Intel parts measure 2.93u, 2.02u and
      * 1.02u (shared/research/robustness.md §4). */
-#if defined(LANES_KSET_AVX512)
-    const double nr_bound = 2.0 * 0x1p-24;
-#elif EXPECT_FMA
-    const double nr_bound = 4.0 * 0x1p-24;
-#else
-    const double nr_bound = 5.0 * 0x1p-24;
-#endif
+    const double nr_bound = EXPECT_RCP14 ? 2.0 * 0x1p-24 : EXPECT_FMA ? 4.0 * 0x1p-24 : 5.0 * 0x1p-24;
     simd_begin(c, "rcp_nr");
     worst = 0;
     for (uint32_t m = 0; m < (1u << 23); m += W * 13) {

@@ -1,5 +1,5 @@
-/* The one place that knows every kernel set's suffix: the tables compiled
- * into this build, and the lookup of the active one. Also the baseline
+/* The tables of the kernel sets compiled into this build, and the lookup
+ * of the active one. Also the baseline
  * helpers for the kernels' data (allocation, scalar ray set-up). */
 #include "trace/kernels.h"
 
@@ -10,45 +10,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define DECLARE(suffix) extern const lanes_kernels lanes_kernels_##suffix;
-#ifdef LANES_HAVE_KSET_SCALAR
-DECLARE(scalar)
-#endif
-#ifdef LANES_HAVE_KSET_SSE4
-DECLARE(sse4)
-#endif
-#ifdef LANES_HAVE_KSET_AVX
-DECLARE(avx)
-#endif
-#ifdef LANES_HAVE_KSET_AVX2
-DECLARE(avx2)
-#endif
-#ifdef LANES_HAVE_KSET_AVX512EMU
-DECLARE(avx512emu)
-#endif
-#ifdef LANES_HAVE_KSET_AVX512
-DECLARE(avx512)
-#endif
+/* One table per set this build compiled (lanes_built_sets.h, generated). */
+#include "lanes_built_sets.h"
+
+#define DECLARE(id, name) extern const lanes_kernels lanes_kernels_##name;
+LANES_BUILT_SETS(DECLARE)
+#undef DECLARE
 
 static const lanes_kernels *const tables[LANES_ISA_COUNT] = {
-#ifdef LANES_HAVE_KSET_SCALAR
-    [LANES_ISA_SCALAR] = &lanes_kernels_scalar,
-#endif
-#ifdef LANES_HAVE_KSET_SSE4
-    [LANES_ISA_SSE4] = &lanes_kernels_sse4,
-#endif
-#ifdef LANES_HAVE_KSET_AVX
-    [LANES_ISA_AVX] = &lanes_kernels_avx,
-#endif
-#ifdef LANES_HAVE_KSET_AVX2
-    [LANES_ISA_AVX2] = &lanes_kernels_avx2,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512EMU
-    [LANES_ISA_AVX512EMU] = &lanes_kernels_avx512emu,
-#endif
-#ifdef LANES_HAVE_KSET_AVX512
-    [LANES_ISA_AVX512] = &lanes_kernels_avx512,
-#endif
+#define ENTRY(id, name) [LANES_ISA_##id] = &lanes_kernels_##name,
+    LANES_BUILT_SETS(ENTRY)
+#undef ENTRY
 };
 
 const lanes_kernels *lanes_kernels_for(lanes_isa isa)

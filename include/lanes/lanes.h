@@ -1,7 +1,7 @@
 /* liblanes: CPU ray tracing whose kernels are compiled for every SIMD width
  * (scalar, SSE4, AVX, AVX2, emulated and native AVX-512) and chosen at run
  * time. This header is the whole public API; it is C11 and includes only
- * standard headers.
+ * standard headers and the list of kernel sets (<lanes/simd/kernel_sets.h>).
  *
  *   lanes_device dev;
  *   if (lanes_device_create("threads=2", &dev) != LANES_OK)
@@ -36,6 +36,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "lanes/simd/kernel_sets.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -81,27 +83,44 @@ LANES_API const char *lanes_last_error_message(void);
  * layer (<lanes/simd/simd.h>, see the README) dispatch them with it.
  * ------------------------------------------------------------------------ */
 
-/* Ordered by preference for the automatic choice; avx512emu (16 lanes from
- * two AVX2 halves) is never chosen automatically. */
+/* The kernel sets, in the order of simd/kernel_sets.h (installed as
+ * <lanes/simd/kernel_sets.h>), the one list they are declared in:
+ *   LANES_ISA_SCALAR     scalar      1 lane, any x86-64
+ *   LANES_ISA_SSE4       sse4        4 lanes, SSE4.1 + POPCNT
+ *   LANES_ISA_AVX        avx         8 lanes, AVX (no AVX2, no FMA)
+ *   LANES_ISA_AVX2       avx2        8 lanes, AVX2 + FMA
+ *   LANES_ISA_AVX512EMU  avx512emu  16 lanes from two AVX2 halves
+ *   LANES_ISA_AVX512     avx512     16 lanes, AVX-512 F/DQ/BW/VL
+ *   LANES_ISA_AVX512VL8  avx512vl8   8 lanes, AVX-512VL: ymm registers with
+ *                                    opmask compares and compress
+ * The enum's order is not the preference: the automatic choice takes the
+ * best-ranked set the CPU runs, and never avx512emu or avx512vl8 (they exist
+ * to separate the effect of width from that of the instruction set). */
 typedef enum lanes_isa {
-    LANES_ISA_SCALAR = 0,
-    LANES_ISA_SSE4,
-    LANES_ISA_AVX,
-    LANES_ISA_AVX2,
-    LANES_ISA_AVX512EMU,
-    LANES_ISA_AVX512,
+#define LANES_ISA_ENUM_(id, name, lanes, family, emulated, rank, automatic, needs) LANES_ISA_##id,
+    LANES_KERNEL_SETS(LANES_ISA_ENUM_)
+#undef LANES_ISA_ENUM_
     LANES_ISA_COUNT,
     LANES_ISA_NONE = -1
 } lanes_isa;
 
-/* "scalar", "sse4", "avx", "avx2", "avx512emu", "avx512" ("none" for any
- * other value) and the lane count (0 for any other value). */
+/* The set's name ("none" for any other value) and lane count (0). */
 LANES_API const char *lanes_isa_name(lanes_isa isa);
 LANES_API int lanes_isa_lanes(lanes_isa isa);
 /* LANES_ISA_NONE for an unknown name. */
 LANES_API lanes_isa lanes_isa_from_name(const char *name);
-/* "scalar, sse4, avx, avx2, avx512emu, avx512", for messages. */
+/* Every set's name, comma separated, for messages. */
 LANES_API const char *lanes_isa_all_names(void);
+/* The sets in order of preference, best first: sets[0..LANES_ISA_COUNT-1].
+ * LANES_MAX_ISA and lanes_set_max_isa cap the automatic choice at a place
+ * in this order. */
+LANES_API const lanes_isa *lanes_isa_ranked(void);
+/* May the automatic choice pick the set? (avx512emu and avx512vl8: no.) */
+LANES_API bool lanes_isa_automatic(lanes_isa isa);
+/* The instruction-set family ("avx2" for avx2 and avx512emu) and whether
+ * the set's width is emulated with narrower vectors. */
+LANES_API const char *lanes_isa_family(lanes_isa isa);
+LANES_API bool lanes_isa_emulated(lanes_isa isa);
 /* Was the set compiled into liblanes (its LANES_ISAS at configure time)? */
 LANES_API bool lanes_isa_compiled(lanes_isa isa);
 /* Can this CPU, with its OS, run the set? (LANES_DISABLE_CPU_FEATURES, a
@@ -114,7 +133,7 @@ LANES_API bool lanes_isa_supported(lanes_isa isa);
  * lacks, else what the OS has not enabled). Changes nothing. */
 LANES_API lanes_status lanes_isa_check(lanes_isa isa, char *why, size_t why_size);
 /* The best set compiled and runnable here, at most LANES_MAX_ISA (or
- * lanes_set_max_isa's cap). Never avx512emu. */
+ * lanes_set_max_isa's cap), among the sets chosen automatically. */
 LANES_API lanes_isa lanes_isa_best(void);
 
 /* The process-wide choice. On first use it comes from LANES_ISA (forces a
@@ -138,7 +157,7 @@ typedef struct lanes_device_impl *lanes_device;
 
 /* config: NULL or "" for the defaults, or comma-separated key=value pairs
  * (Embree's convention):
- *   isa=NAME          scalar, sse4, avx, avx2, avx512emu, avx512; default:
+ *   isa=NAME          a set's name (lanes_isa_all_names); default:
  *                     the process-wide choice (lanes_isa_current: LANES_ISA
  *                     if set, else the best set the CPU runs, at most
  *                     LANES_MAX_ISA). A set the CPU cannot run, or an

@@ -1,6 +1,6 @@
 /* The baseline side of an outside project's width-generic kernel: one table
- * entry per kernel set its build compiled (LANES_HAVE_KSET_<SET>, from
- * lanes_add_kernel_sets), each set it can run checked against plain C, then
+ * entry per kernel set its build compiled (the list lanes_add_kernel_sets
+ * writes), each set it can run checked against plain C, then
  * the set lanes chooses for this CPU dispatched. Compiled without any -m
  * flag: only the kernel objects hold the sets' instructions. */
 #include <lanes/lanes.h>
@@ -8,15 +8,15 @@
 #include <stdio.h>
 #include <string.h>
 
-#define DECLARE(set)                                                                       \
+/* consumer_kernels_sets.h, written by lanes_add_kernel_sets: the sets
+ * this build compiled, as CONSUMER_KERNELS_SETS(X) = X(ID, name) ... */
+#include "consumer_kernels_sets.h"
+
+#define DECLARE(id, set)                                                                   \
     int consumer_lanes_##set(void);                                                       \
     size_t consumer_count_below_and_scale_##set(float *x, size_t n, float threshold, float scale);
-DECLARE(scalar)
-DECLARE(sse4)
-DECLARE(avx)
-DECLARE(avx2)
-DECLARE(avx512emu)
-DECLARE(avx512)
+CONSUMER_KERNELS_SETS(DECLARE)
+#undef DECLARE
 
 typedef struct kernel_set {
     lanes_isa isa;
@@ -24,27 +24,9 @@ typedef struct kernel_set {
     size_t (*count_below_and_scale)(float *x, size_t n, float threshold, float scale);
 } kernel_set;
 
-#define ENTRY(ISA, set) {ISA, consumer_lanes_##set, consumer_count_below_and_scale_##set},
-static const kernel_set sets[] = {
-#ifdef LANES_HAVE_KSET_SCALAR
-    ENTRY(LANES_ISA_SCALAR, scalar)
-#endif
-#ifdef LANES_HAVE_KSET_SSE4
-    ENTRY(LANES_ISA_SSE4, sse4)
-#endif
-#ifdef LANES_HAVE_KSET_AVX
-    ENTRY(LANES_ISA_AVX, avx)
-#endif
-#ifdef LANES_HAVE_KSET_AVX2
-    ENTRY(LANES_ISA_AVX2, avx2)
-#endif
-#ifdef LANES_HAVE_KSET_AVX512EMU
-    ENTRY(LANES_ISA_AVX512EMU, avx512emu)
-#endif
-#ifdef LANES_HAVE_KSET_AVX512
-    ENTRY(LANES_ISA_AVX512, avx512)
-#endif
-};
+#define ENTRY(id, set) {LANES_ISA_##id, consumer_lanes_##set, consumer_count_below_and_scale_##set},
+static const kernel_set sets[] = {CONSUMER_KERNELS_SETS(ENTRY)};
+#undef ENTRY
 enum { N = 1037, SETS = sizeof sets / sizeof sets[0] };
 
 static int passed, failed;
