@@ -218,8 +218,9 @@ void tk_hist_print(const tk_hist *h, const char *what)
 
 /* ---- meta: the tables themselves ---- */
 
-void tk_family_meta(tk_ctx *c)
+void tk_family_meta(tk_ctx *c, int arg)
 {
+    (void)arg;
     /* bit 0 SSE4.1, 1 AVX, 2 AVX2, 3 FMA, 4 AVX-512F, as kernels.h defines
      * them: the compiler must have been told exactly what the set's row in
      * simd/kernel_sets.h says it needs. A set built with the wrong flags
@@ -244,19 +245,16 @@ void tk_family_meta(tk_ctx *c)
         if (k->compiled_features != want_features[isa])
             tk_fail(&g, "compiled_features 0x%x, expected 0x%x", k->compiled_features,
                     want_features[isa]);
-        const void *entries[] = {
-            (const void *)k->rays_prepare, (const void *)k->box_packet,
-            (const void *)k->box_partition, (const void *)k->box_wide,
-            (const void *)k->tri_packet[0], (const void *)k->tri_packet[1],
-            (const void *)k->tri_packet_any[0], (const void *)k->tri_packet_any[1],
-            (const void *)k->tri_wide[0], (const void *)k->tri_wide[1],
-            (const void *)k->tri_wide_closest[0], (const void *)k->tri_wide_closest[1],
-            (const void *)k->tri_wide_any[0], (const void *)k->tri_wide_any[1],
-            (const void *)k->frustum_build, (const void *)k->frustum_boxes,
-            (const void *)k->frustum_tris,
-        };
-        for (size_t e = 0; e < sizeof entries / sizeof entries[0]; e++)
-            if (!entries[e]) tk_fail(&g, "table entry %zu is NULL", e);
+        /* every member of kernel_list.h filled */
+#define META_CHECK_ONE_(member, label)                                                      \
+    if (!(member)) tk_fail(&g, "table entry %s is NULL", label);
+#define META_CHECK(kind, ret, name, params, args) META_CHECK_##kind(name)
+#define META_CHECK_PLAIN(name) META_CHECK_ONE_(k->name, #name)
+#define META_CHECK_COUNTED(name) META_CHECK_ONE_(k->name, #name)
+#define META_CHECK_COUNTED_VOID(name) META_CHECK_ONE_(k->name, #name)
+#define META_CHECK_PER_ALGO(name)                                                            \
+    for (int a = 0; a < LANES_TRI_ALGO_COUNT; a++) META_CHECK_ONE_(k->name[a], #name "[algo]")
+        LANES_KERNELS(META_CHECK)
         tk_end(&g, "%d lanes, features 0x%x", k->lanes, k->compiled_features);
     }
 }
@@ -306,8 +304,9 @@ static void prepare_ray(tk_rng *rng, ref_ray *r)
  * test_simd_ops_set.c); one CPU's table may do better, another worse. */
 static const double prepare_fast_bound[3] = {5.0 * 0x1p-24, 4.0 * 0x1p-24, 2.0 * 0x1p-24};
 
-void tk_family_prepare(tk_ctx *c)
+void tk_family_prepare(tk_ctx *c, int arg)
 {
+    (void)arg;
     size_t n = c->target;
     tk_rng rng;
     tk_seed(&rng, c->seed ^ 0x9e9a9e);
@@ -495,13 +494,16 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+#define TK_FAMILY_NAME_(name, run, arg) " " #name
+#define TK_FAMILY_NAMES TK_FAMILIES(TK_FAMILY_NAME_)
+
 static int usage(const char *argv0)
 {
     fprintf(stderr,
             "usage: %s [--quick] [--isa a,b,...] [--family f,...] [--seed N] [--cases N] [--print N] [--show-band]\n"
             "  sets: %s\n"
-            "  families: meta, prepare, box, tri_moller, tri_watertight, frustum\n",
-            argv0, lanes_isa_all_names());
+            "  families:%s\n",
+            argv0, lanes_isa_all_names(), TK_FAMILY_NAMES);
     return 2;
 }
 
@@ -549,9 +551,18 @@ int main(int argc, char **argv)
             p = e + 1;
         }
     }
-    static const char *const families[] = {"meta", "prepare", "box", "tri_moller",
-                                           "tri_watertight", "frustum"};
-    const int n_families = (int)(sizeof families / sizeof families[0]);
+    static const struct {
+        const char *name;
+        void (*run)(tk_ctx *, int);
+        int arg;
+    } family_table[] = {
+#define FAMILY(name, run, arg) {#name, run, arg},
+        TK_FAMILIES(FAMILY)
+#undef FAMILY
+    };
+    const int n_families = (int)(sizeof family_table / sizeof family_table[0]);
+    const char *families[sizeof family_table / sizeof family_table[0]];
+    for (int f = 0; f < n_families; f++) families[f] = family_table[f].name;
     if (family_list) {
         for (const char *p = family_list; *p;) {
             const char *e = strchr(p, ',');
@@ -601,14 +612,7 @@ int main(int argc, char **argv)
             if (skip_reason[i]) tk_skip(&c, "%s: %s (family %s)", lanes_isa_name((lanes_isa)i),
                                         skip_reason[i], families[f]);
         double t0 = now();
-        switch (f) {
-        case 0: tk_family_meta(&c); break;
-        case 1: tk_family_prepare(&c); break;
-        case 2: tk_family_box(&c); break;
-        case 3: tk_family_tri(&c, LANES_TRI_MOLLER); break;
-        case 4: tk_family_tri(&c, LANES_TRI_WATERTIGHT); break;
-        default: tk_family_frustum(&c); break;
-        }
+        family_table[f].run(&c, family_table[f].arg);
         printf("== family %s: %.2f s\n", families[f], now() - t0);
     }
     printf("total %.2f s\n", now() - t_start);

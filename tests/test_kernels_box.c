@@ -892,8 +892,9 @@ static void run_variant(const lanes_kernels *k, bx_world *w, int v, bx_res *res,
     }
 }
 
-void tk_family_box(tk_ctx *c)
+void tk_family_box(tk_ctx *c, int arg)
 {
+    (void)arg;
     bx_world w;
     memset(&w, 0, sizeof w);
     if (c->n_isa == 0) return;

@@ -205,10 +205,20 @@ static inline bool tk_tally_case(tk_tally *t, bool targeted, double margin, bool
 void tk_tally_close(tk_group *g, const tk_tally *t, char *buf, size_t size);
 
 /* The families (one ctest entry each). */
-void tk_family_meta(tk_ctx *c);
-void tk_family_prepare(tk_ctx *c);
-void tk_family_box(tk_ctx *c);
+void tk_family_meta(tk_ctx *c, int arg);
+void tk_family_prepare(tk_ctx *c, int arg);
+void tk_family_box(tk_ctx *c, int arg);
 void tk_family_tri(tk_ctx *c, int algo);
-void tk_family_frustum(tk_ctx *c);
+void tk_family_frustum(tk_ctx *c, int arg);
+
+/* The test families, one ctest entry each (tests/kernels.cmake reads the
+ * names from these rows): X(name, function, argument). */
+#define TK_FAMILIES(X)                                                                     \
+    X(meta, tk_family_meta, 0)                                                             \
+    X(prepare, tk_family_prepare, 0)                                                       \
+    X(box, tk_family_box, 0)                                                               \
+    X(tri_moller, tk_family_tri, LANES_TRI_MOLLER)                                         \
+    X(tri_watertight, tk_family_tri, LANES_TRI_WATERTIGHT)                                 \
+    X(frustum, tk_family_frustum, 0)
 
 #endif

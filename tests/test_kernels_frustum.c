@@ -537,8 +537,9 @@ static void describe_packet(const fr_set *s, const fr_block *b, char *buf, size_
     if (b->nr > 4 && at > 0 && (size_t)at < size) snprintf(buf + at, size - (size_t)at, " ...");
 }
 
-void tk_family_frustum(tk_ctx *c)
+void tk_family_frustum(tk_ctx *c, int arg)
 {
+    (void)arg;
     if (c->n_isa == 0) return;
     tk_rng g;
     tk_seed(&g, c->seed ^ 0xf2057);

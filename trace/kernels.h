@@ -32,6 +32,7 @@
 
 #include "simd/isa.h"
 #include "trace/accuracy.h"
+#include "trace/kernel_list.h"
 
 #define LANES_MAX_W 16
 #define LANES_ALIGN 64
@@ -232,89 +233,12 @@ typedef struct lanes_kernels {
      * bit 0 SSE4.1, 1 AVX, 2 AVX2, 3 FMA, 4 AVX-512F. */
     uint32_t compiled_features;
 
-    /* Computes 1/d and deactivates invalid rays (see above). */
-    void (*rays_prepare)(lanes_rays *rays, lanes_rcp_mode mode);
-
-    /* N rays against one box. idx, when not NULL, names the rays to test
-     * (idx[0..n-1]) and bit i of hit is the ray idx[i]; otherwise rays 0..n-1.
-     * tentry (may be NULL) receives max(tnear, entry distance) for hits.
-     * Returns the number of hits. */
-    size_t (*box_packet)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                         const lanes_box *box, uint32_t *hit, float *tentry,
-                         lanes_lane_stats *stats);
-    /* Partition step of partition traversal: writes to out the entries of
-     * idx[0..n-1] whose rays hit the box, in order, and returns their number
-     * (out may equal idx). */
-    size_t (*box_partition)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                            const lanes_box *box, uint32_t *out,
-                            lanes_lane_stats *stats);
-    /* One ray against N boxes. */
-    size_t (*box_wide)(const lanes_ray *ray, const lanes_boxes *boxes, size_t n,
-                       uint32_t *hit, float *tentry, lanes_lane_stats *stats);
-
-    /* N rays against one triangle: per-ray results, for hits only. */
-    size_t (*tri_packet[LANES_TRI_ALGO_COUNT])(const lanes_rays *rays, const uint32_t *idx,
-                                               size_t n, const lanes_triangle *tri,
-                                               uint32_t *hit, lanes_tri_hits *out,
-                                               lanes_lane_stats *stats);
-    /* N rays against one triangle, occlusion only: hit bits, no t/u/v. */
-    size_t (*tri_packet_any[LANES_TRI_ALGO_COUNT])(const lanes_rays *rays, const uint32_t *idx,
-                                                   size_t n, const lanes_triangle *tri,
-                                                   uint32_t *hit, lanes_lane_stats *stats);
-    /* One ray against N triangles: per-triangle results, for hits only. */
-    size_t (*tri_wide[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray, const lanes_triangles *tris,
-                                             size_t n, uint32_t *hit, lanes_tri_hits *out,
-                                             lanes_lane_stats *stats);
-    /* One ray against N triangles, closest hit: returns the index of the
-     * nearest hit (ties: the lowest index) or -1, and its t, u, v. */
-    long (*tri_wide_closest[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray,
-                                                   const lanes_triangles *tris, size_t n,
-                                                   float *t, float *u, float *v,
-                                                   lanes_lane_stats *stats);
-    /* One ray against N triangles, occlusion: stops at the first vector
-     * holding a hit. */
-    bool (*tri_wide_any[LANES_TRI_ALGO_COUNT])(const lanes_ray *ray, const lanes_triangles *tris,
-                                               size_t n, lanes_lane_stats *stats);
-
-    /* Builds the frustum of rays idx[0..n-1] (all of 0..n-1 when idx is NULL),
-     * SIMD across the rays. */
-    void (*frustum_build)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                          lanes_frustum *f);
-    /* Culling, SIMD across primitives: bit i set = primitive i may be hit
-     * by some ray of the frustum; clear = no ray can hit it. Returns the
-     * number of bits set. */
-    size_t (*frustum_boxes)(const lanes_frustum *f, const lanes_boxes *boxes, size_t n,
-                            lanes_cull_method method, uint32_t *keep,
-                            lanes_lane_stats *stats);
-    size_t (*frustum_tris)(const lanes_frustum *f, const lanes_triangles *tris, size_t n,
-                           lanes_cull_method method, uint32_t *keep,
-                           lanes_lane_stats *stats);
-
-    /* Single-ray traversal of n prepared rays (lanes_ray_prepare_rcp), one after
-     * the other. The wide form reads a wide BVH of wide_width children
-     * (SIMD across a node's children and across a leaf's triangles); the
-     * BVH2 form visits two children at a time, as the thesis' "single"
-     * baseline, and tests leaf triangles with the wide triangle kernel. */
+    /* Single-ray traversal reads a wide BVH of this many children. */
     int wide_width;
-    void (*trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,
-                       const lanes_ray *rays, size_t n, lanes_hit *hits, lanes_trace_stats *stats);
-    void (*occluded_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                          lanes_accuracy accuracy, const lanes_ray *rays, size_t n, uint8_t *occluded,
-                          lanes_trace_stats *stats);
-    void (*trace_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
-                       size_t n, lanes_hit *hits, lanes_trace_stats *stats);
-    void (*occluded_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
-                          size_t n, uint8_t *occluded, lanes_trace_stats *stats);
 
-    /* One packet of rays->count (<= LANES_PACKET_MAX_RAYS) prepared rays
-     * through the BVH2. Closest hit: each ray's tfar shrinks to its hit
-     * distance, and prim[i], u[i], v[i] are written for rays that hit
-     * (prim must be LANES_NO_HIT on entry). Occlusion: occluded[i] is set to
-     * 1 for rays that hit anything (and their tfar to -inf); u, v, prim may
-     * be NULL. */
-    void (*trace_packet)(const struct lanes_bvh2 *b, const lanes_packet_options *opt,
-                         lanes_rays *rays, uint32_t *prim, float *u, float *v, uint8_t *occluded,
-                         lanes_packet_stats *stats);
+    /* The kernels, one member per row of kernel_list.h (which says what
+     * each does). */
+    LANES_KERNELS(LANES_KERNEL_MEMBER)
 } lanes_kernels;
 
 /* The table of the active set (lanes_isa_current()). */

@@ -30,14 +30,6 @@ LANES_BODY size_t box_packet_body(const lanes_rays *rays, const uint32_t *idx, s
     return hits;
 }
 
-size_t LANES_FN(lanes_box_packet)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                                  const lanes_box *box, uint32_t *hit, float *tentry,
-                                  lanes_lane_stats *stats)
-{
-    return stats ? box_packet_body(rays, idx, n, box, hit, tentry, stats)
-                 : box_packet_body(rays, idx, n, box, hit, tentry, NULL);
-}
-
 LANES_BODY size_t box_partition_body(const lanes_rays *rays, const uint32_t *idx, size_t n,
                                      const lanes_box *box, uint32_t *out,
                                      lanes_lane_stats *stats)
@@ -62,14 +54,6 @@ LANES_BODY size_t box_partition_body(const lanes_rays *rays, const uint32_t *idx
         kept += (size_t)vi_compress_store((int32_t *)(void *)(out + kept), m, id);
     }
     return kept;
-}
-
-size_t LANES_FN(lanes_box_partition)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                                     const lanes_box *box, uint32_t *out,
-                                     lanes_lane_stats *stats)
-{
-    return stats ? box_partition_body(rays, idx, n, box, out, stats)
-                 : box_partition_body(rays, idx, n, box, out, NULL);
 }
 
 /* One ray against N boxes, SIMD across boxes: the wide-BVH node test. The
@@ -110,9 +94,5 @@ LANES_BODY size_t box_wide_body(const lanes_ray *ray, const lanes_boxes *boxes, 
     return hits;
 }
 
-size_t LANES_FN(lanes_box_wide)(const lanes_ray *ray, const lanes_boxes *boxes, size_t n,
-                                uint32_t *hit, float *tentry, lanes_lane_stats *stats)
-{
-    return stats ? box_wide_body(ray, boxes, n, hit, tentry, stats)
-                 : box_wide_body(ray, boxes, n, hit, tentry, NULL);
-}
+/* The entry points: each body instantiated with and without counting. */
+LANES_KERNELS_BOX(LANES_KERNEL_ENTRY)

@@ -151,14 +151,6 @@ LANES_BODY size_t frustum_boxes_body(const lanes_frustum *f, const lanes_boxes *
     return kept;
 }
 
-size_t LANES_FN(lanes_frustum_boxes)(const lanes_frustum *f, const lanes_boxes *boxes, size_t n,
-                                     lanes_cull_method method, uint32_t *keep,
-                                     lanes_lane_stats *stats)
-{
-    return stats ? frustum_boxes_body(f, boxes, n, method, keep, stats)
-                 : frustum_boxes_body(f, boxes, n, method, keep, NULL);
-}
-
 LANES_BODY size_t frustum_tris_body(const lanes_frustum *f, const lanes_triangles *t, size_t n,
                                     lanes_cull_method method, uint32_t *keep,
                                     lanes_lane_stats *stats)
@@ -186,10 +178,5 @@ LANES_BODY size_t frustum_tris_body(const lanes_frustum *f, const lanes_triangle
     return kept;
 }
 
-size_t LANES_FN(lanes_frustum_tris)(const lanes_frustum *f, const lanes_triangles *tris, size_t n,
-                                    lanes_cull_method method, uint32_t *keep,
-                                    lanes_lane_stats *stats)
-{
-    return stats ? frustum_tris_body(f, tris, n, method, keep, stats)
-                 : frustum_tris_body(f, tris, n, method, keep, NULL);
-}
+/* The entry points: each body instantiated with and without counting. */
+LANES_KERNELS_FRUSTUM(LANES_KERNEL_ENTRY)

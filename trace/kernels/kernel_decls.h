@@ -1,68 +1,62 @@
-/* The suffixed entry points of one kernel set, as the per-ISA files define
- * them and kernel_table.c collects them. Included only by per-ISA files. */
+/* The suffixed entry points of one kernel set, generated from the rows of
+ * trace/kernel_list.h: their prototypes, the table's initializer, and the
+ * counting and non-counting instantiations of each body. Included only by
+ * per-ISA files. */
 #ifndef LANES_TRACE_KERNEL_DECLS_H
 #define LANES_TRACE_KERNEL_DECLS_H
 
 #include "simd/simd.h"
 #include "trace/kernels.h"
 
-void LANES_FN(lanes_rays_prepare)(lanes_rays *rays, lanes_rcp_mode mode);
+#define LANES_UNPAREN(...) __VA_ARGS__
 
-size_t LANES_FN(lanes_box_packet)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                                  const lanes_box *box, uint32_t *hit, float *tentry,
-                                  lanes_lane_stats *stats);
-size_t LANES_FN(lanes_box_partition)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                                     const lanes_box *box, uint32_t *out,
-                                     lanes_lane_stats *stats);
-size_t LANES_FN(lanes_box_wide)(const lanes_ray *ray, const lanes_boxes *boxes, size_t n,
-                                uint32_t *hit, float *tentry, lanes_lane_stats *stats);
+_Static_assert(LANES_TRI_ALGO_COUNT == 2, "PER_ALGO rows instantiate _moller and _watertight");
 
-#define LANES_DECLARE_TRI(algo)                                                            \
-    size_t LANES_FN(lanes_tri_packet_##algo)(const lanes_rays *rays, const uint32_t *idx,   \
-                                             size_t n, const lanes_triangle *tri,          \
-                                             uint32_t *hit, lanes_tri_hits *out,           \
-                                             lanes_lane_stats *stats);                     \
-    size_t LANES_FN(lanes_tri_packet_any_##algo)(const lanes_rays *rays, const uint32_t *idx, \
-                                                 size_t n, const lanes_triangle *tri,      \
-                                                 uint32_t *hit, lanes_lane_stats *stats);  \
-    size_t LANES_FN(lanes_tri_wide_##algo)(const lanes_ray *ray, const lanes_triangles *tris, \
-                                           size_t n, uint32_t *hit, lanes_tri_hits *out,   \
-                                           lanes_lane_stats *stats);                       \
-    long LANES_FN(lanes_tri_wide_closest_##algo)(const lanes_ray *ray,                     \
-                                                 const lanes_triangles *tris, size_t n,    \
-                                                 float *t, float *u, float *v,             \
-                                                 lanes_lane_stats *stats);                 \
-    bool LANES_FN(lanes_tri_wide_any_##algo)(const lanes_ray *ray, const lanes_triangles *tris, \
-                                             size_t n, lanes_lane_stats *stats);
-LANES_DECLARE_TRI(moller)
-LANES_DECLARE_TRI(watertight)
-#undef LANES_DECLARE_TRI
+/* Prototypes. */
+#define LANES_KERNEL_PROTO(kind, ret, name, params, args) LANES_KERNEL_PROTO_##kind(ret, name, params)
+#define LANES_KERNEL_PROTO_PLAIN(ret, name, params) ret LANES_FN(lanes_##name) params;
+#define LANES_KERNEL_PROTO_COUNTED(ret, name, params) ret LANES_FN(lanes_##name) params;
+#define LANES_KERNEL_PROTO_COUNTED_VOID(ret, name, params) ret LANES_FN(lanes_##name) params;
+#define LANES_KERNEL_PROTO_PER_ALGO(ret, name, params)                                      \
+    ret LANES_FN(lanes_##name##_moller) params;                                            \
+    ret LANES_FN(lanes_##name##_watertight) params;
+LANES_KERNELS(LANES_KERNEL_PROTO)
 
-void LANES_FN(lanes_frustum_build)(const lanes_rays *rays, const uint32_t *idx, size_t n,
-                                   lanes_frustum *f);
-size_t LANES_FN(lanes_frustum_boxes)(const lanes_frustum *f, const lanes_boxes *boxes, size_t n,
-                                     lanes_cull_method method, uint32_t *keep,
-                                     lanes_lane_stats *stats);
-size_t LANES_FN(lanes_frustum_tris)(const lanes_frustum *f, const lanes_triangles *tris, size_t n,
-                                    lanes_cull_method method, uint32_t *keep,
-                                    lanes_lane_stats *stats);
+/* The table's initializer (kernel_table.c). */
+#define LANES_KERNEL_INIT(kind, ret, name, params, args) LANES_KERNEL_INIT_##kind(name)
+#define LANES_KERNEL_INIT_PLAIN(name) .name = LANES_FN(lanes_##name),
+#define LANES_KERNEL_INIT_COUNTED(name) .name = LANES_FN(lanes_##name),
+#define LANES_KERNEL_INIT_COUNTED_VOID(name) .name = LANES_FN(lanes_##name),
+#define LANES_KERNEL_INIT_PER_ALGO(name)                                                    \
+    .name = {[LANES_TRI_MOLLER] = LANES_FN(lanes_##name##_moller),                         \
+             [LANES_TRI_WATERTIGHT] = LANES_FN(lanes_##name##_watertight)},
 
-struct lanes_bvh2;
-struct lanes_wbvh;
-void LANES_FN(lanes_trace_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                                lanes_accuracy accuracy, const lanes_ray *rays, size_t n,
-                                lanes_hit *hits, lanes_trace_stats *stats);
-void LANES_FN(lanes_occluded_wide)(const struct lanes_wbvh *w, const struct lanes_bvh2 *b,
-                                   lanes_accuracy accuracy, const lanes_ray *rays, size_t n,
-                                   uint8_t *occluded, lanes_trace_stats *stats);
-void LANES_FN(lanes_trace_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy,
-                                const lanes_ray *rays, size_t n, lanes_hit *hits,
-                                lanes_trace_stats *stats);
-void LANES_FN(lanes_occluded_bvh2)(const struct lanes_bvh2 *b, lanes_accuracy accuracy,
-                                   const lanes_ray *rays, size_t n, uint8_t *occluded,
-                                   lanes_trace_stats *stats);
-void LANES_FN(lanes_trace_packet)(const struct lanes_bvh2 *b, const lanes_packet_options *opt,
-                                  lanes_rays *rays, uint32_t *prim, float *u, float *v,
-                                  uint8_t *occluded, lanes_packet_stats *stats);
+/* The entry points of a family, expanded at the end of its file
+ * (LANES_KERNELS_BOX(LANES_KERNEL_ENTRY)): each body is instantiated with
+ * the caller's stats and with NULL, which compiles the counting out. */
+#define LANES_KERNEL_ENTRY(kind, ret, name, params, args) LANES_KERNEL_ENTRY_##kind(ret, name, params, args)
+#define LANES_KERNEL_ENTRY_PLAIN(ret, name, params, args)
+#define LANES_KERNEL_ENTRY_COUNTED(ret, name, params, args)                                 \
+    ret LANES_FN(lanes_##name) params                                                      \
+    {                                                                                      \
+        return stats ? name##_body(LANES_UNPAREN args, stats) : name##_body(LANES_UNPAREN args, NULL); \
+    }
+#define LANES_KERNEL_ENTRY_COUNTED_VOID(ret, name, params, args)                            \
+    ret LANES_FN(lanes_##name) params                                                      \
+    {                                                                                      \
+        if (stats)                                                                         \
+            name##_body(LANES_UNPAREN args, stats);                                        \
+        else                                                                               \
+            name##_body(LANES_UNPAREN args, NULL);                                         \
+    }
+#define LANES_KERNEL_ENTRY_PER_ALGO(ret, name, params, args)                                \
+    LANES_KERNEL_ENTRY_ALGO_(ret, name, moller, LANES_TRI_MOLLER, params, args)            \
+    LANES_KERNEL_ENTRY_ALGO_(ret, name, watertight, LANES_TRI_WATERTIGHT, params, args)
+#define LANES_KERNEL_ENTRY_ALGO_(ret, name, algo_name, ALGO, params, args)                  \
+    ret LANES_FN(lanes_##name##_##algo_name) params                                        \
+    {                                                                                      \
+        return stats ? name##_body(ALGO, LANES_UNPAREN args, stats)                        \
+                     : name##_body(ALGO, LANES_UNPAREN args, NULL);                        \
+    }
 
 #endif

@@ -302,12 +302,5 @@ LANES_BODY void trace_packet_body(const lanes_bvh2 *b, const lanes_packet_option
     }
 }
 
-void LANES_FN(lanes_trace_packet)(const lanes_bvh2 *b, const lanes_packet_options *opt,
-                                  lanes_rays *rays, uint32_t *prim, float *u, float *v,
-                                  uint8_t *occluded, lanes_packet_stats *stats)
-{
-    if (stats)
-        trace_packet_body(b, opt, rays, prim, u, v, occluded, stats);
-    else
-        trace_packet_body(b, opt, rays, prim, u, v, occluded, NULL);
-}
+/* The entry points: each body instantiated with and without counting. */
+LANES_KERNELS_PACKET(LANES_KERNEL_ENTRY)

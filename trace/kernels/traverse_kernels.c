@@ -255,32 +255,12 @@ LANES_BODY void trace_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_trace_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
-                                const lanes_ray *rays, size_t n, lanes_hit *hits,
-                                lanes_trace_stats *stats)
-{
-    if (stats)
-        trace_wide_body(wb, b, accuracy, rays, n, hits, stats);
-    else
-        trace_wide_body(wb, b, accuracy, rays, n, hits, NULL);
-}
-
 LANES_BODY void occluded_wide_body(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
                                    const lanes_ray *rays, size_t n, uint8_t *occluded,
                                    lanes_trace_stats *stats)
 {
     for (size_t i = 0; i < n; i++) occluded[i] = wide_walk(wb, b, accuracy, &rays[i], true, NULL, stats);
     if (stats) stats->rays += n;
-}
-
-void LANES_FN(lanes_occluded_wide)(const lanes_wbvh *wb, const lanes_bvh2 *b, lanes_accuracy accuracy,
-                                   const lanes_ray *rays, size_t n, uint8_t *occluded,
-                                   lanes_trace_stats *stats)
-{
-    if (stats)
-        occluded_wide_body(wb, b, accuracy, rays, n, occluded, stats);
-    else
-        occluded_wide_body(wb, b, accuracy, rays, n, occluded, NULL);
 }
 
 LANES_BODY void trace_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
@@ -293,15 +273,6 @@ LANES_BODY void trace_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy, co
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_trace_bvh2)(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
-                                size_t n, lanes_hit *hits, lanes_trace_stats *stats)
-{
-    if (stats)
-        trace_bvh2_body(b, accuracy, rays, n, hits, stats);
-    else
-        trace_bvh2_body(b, accuracy, rays, n, hits, NULL);
-}
-
 LANES_BODY void occluded_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
                                    size_t n, uint8_t *occluded, lanes_trace_stats *stats)
 {
@@ -309,11 +280,5 @@ LANES_BODY void occluded_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy,
     if (stats) stats->rays += n;
 }
 
-void LANES_FN(lanes_occluded_bvh2)(const lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,
-                                   size_t n, uint8_t *occluded, lanes_trace_stats *stats)
-{
-    if (stats)
-        occluded_bvh2_body(b, accuracy, rays, n, occluded, stats);
-    else
-        occluded_bvh2_body(b, accuracy, rays, n, occluded, NULL);
-}
+/* The entry points: each body instantiated with and without counting. */
+LANES_KERNELS_TRAVERSE(LANES_KERNEL_ENTRY)

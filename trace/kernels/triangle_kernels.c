@@ -46,47 +46,25 @@ LANES_BODY size_t tri_wide_body(lanes_tri_algo algo, const lanes_ray *ray,
     return hits;
 }
 
-/* Entry points: one per algorithm and form, each with a counting and a
- * non-counting instance of its body. */
-#define LANES_DEFINE_TRI(algo_name, ALGO)                                                  \
-    size_t LANES_FN(lanes_tri_packet_##algo_name)(const lanes_rays *rays, const uint32_t *idx, \
-                                                  size_t n, const lanes_triangle *tri,     \
-                                                  uint32_t *hit, lanes_tri_hits *out,      \
-                                                  lanes_lane_stats *stats)                 \
-    {                                                                                      \
-        return stats ? tri_packet_body(ALGO, rays, idx, n, tri, hit, out, stats)           \
-                     : tri_packet_body(ALGO, rays, idx, n, tri, hit, out, NULL);           \
-    }                                                                                      \
-    size_t LANES_FN(lanes_tri_packet_any_##algo_name)(const lanes_rays *rays,              \
-                                                      const uint32_t *idx, size_t n,       \
-                                                      const lanes_triangle *tri,           \
-                                                      uint32_t *hit, lanes_lane_stats *stats) \
-    {                                                                                      \
-        return stats ? tri_packet_body(ALGO, rays, idx, n, tri, hit, NULL, stats)          \
-                     : tri_packet_body(ALGO, rays, idx, n, tri, hit, NULL, NULL);          \
-    }                                                                                      \
-    size_t LANES_FN(lanes_tri_wide_##algo_name)(const lanes_ray *ray, const lanes_triangles *tris, \
-                                                size_t n, uint32_t *hit, lanes_tri_hits *out, \
-                                                lanes_lane_stats *stats)                   \
-    {                                                                                      \
-        return stats ? tri_wide_body(ALGO, ray, tris, n, hit, out, stats)                  \
-                     : tri_wide_body(ALGO, ray, tris, n, hit, out, NULL);                  \
-    }                                                                                      \
-    long LANES_FN(lanes_tri_wide_closest_##algo_name)(const lanes_ray *ray,                \
-                                                      const lanes_triangles *tris, size_t n, \
-                                                      float *t, float *u, float *v,        \
-                                                      lanes_lane_stats *stats)             \
-    {                                                                                      \
-        return stats ? tri_closest_body(ALGO, ray, tris, n, t, u, v, stats)                \
-                     : tri_closest_body(ALGO, ray, tris, n, t, u, v, NULL);                \
-    }                                                                                      \
-    bool LANES_FN(lanes_tri_wide_any_##algo_name)(const lanes_ray *ray,                    \
-                                                  const lanes_triangles *tris, size_t n,   \
-                                                  lanes_lane_stats *stats)                 \
-    {                                                                                      \
-        return stats ? tri_any_body(ALGO, ray, tris, n, stats)                             \
-                     : tri_any_body(ALGO, ray, tris, n, NULL);                             \
-    }
+LANES_BODY size_t tri_packet_any_body(lanes_tri_algo algo, const lanes_rays *rays, const uint32_t *idx,
+                                      size_t n, const lanes_triangle *tri, uint32_t *hit,
+                                      lanes_lane_stats *stats)
+{
+    return tri_packet_body(algo, rays, idx, n, tri, hit, NULL, stats);
+}
 
-LANES_DEFINE_TRI(moller, LANES_TRI_MOLLER)
-LANES_DEFINE_TRI(watertight, LANES_TRI_WATERTIGHT)
+LANES_BODY long tri_wide_closest_body(lanes_tri_algo algo, const lanes_ray *ray, const lanes_triangles *tris,
+                                      size_t n, float *t, float *u, float *v, lanes_lane_stats *stats)
+{
+    return tri_closest_body(algo, ray, tris, n, t, u, v, stats);
+}
+
+LANES_BODY bool tri_wide_any_body(lanes_tri_algo algo, const lanes_ray *ray, const lanes_triangles *tris,
+                                  size_t n, lanes_lane_stats *stats)
+{
+    return tri_any_body(algo, ray, tris, n, stats);
+}
+
+/* The entry points: one per algorithm and form, each body instantiated with
+ * and without counting. */
+LANES_KERNELS_TRI(LANES_KERNEL_ENTRY)

@@ -1,0 +1,149 @@
+/* Every kernel of a kernel set, declared once. From these rows come the
+ * lanes_kernels table's members (kernels.h), each set's prototypes and table
+ * (trace/kernels/kernel_decls.h, kernel_table.c) and the counting and
+ * non-counting entry points (trace/kernels/kernel_decls.h). Adding a kernel:
+ * its body in its family's file, one row here, its test.
+ *
+ *   X(kind, ret, name, params, args)
+ *
+ *   PLAIN         the family's file defines LANES_FN(lanes_<name>) itself
+ *   COUNTED       the file defines `LANES_BODY ret <name>_body(params)`, whose
+ *                 last parameter is the stats pointer; the entry point
+ *                 instantiates it twice, with stats and with NULL, so that the
+ *                 second copy carries no counting code (args: the parameters
+ *                 before stats, to forward)
+ *   COUNTED_VOID  the same, for a body returning void
+ *   PER_ALGO      one entry point per ray/triangle algorithm (a table member
+ *                 indexed by lanes_tri_algo: _moller, _watertight), each the
+ *                 COUNTED instantiation of `<name>_body(algo, params)`
+ *
+ * One list per family, each expanded by its family's file; LANES_KERNELS is
+ * all of them. Conventions every kernel keeps: kernels.h. */
+#ifndef LANES_TRACE_KERNEL_LIST_H
+#define LANES_TRACE_KERNEL_LIST_H
+
+/* ray_kernels.c: computes 1/d and deactivates invalid rays. */
+#define LANES_KERNELS_RAY(X) X(PLAIN, void, rays_prepare, (lanes_rays * rays, lanes_rcp_mode mode), ())
+
+/* box_kernels.c
+ * box_packet: N rays against one box. idx, when not NULL, names the rays to
+ *   test (idx[0..n-1]) and bit i of hit is the ray idx[i]; otherwise rays
+ *   0..n-1. tentry (may be NULL) receives max(tnear, entry distance) for
+ *   hits. Returns the number of hits.
+ * box_partition: the partition step of partition traversal: writes to out
+ *   the entries of idx[0..n-1] whose rays hit the box, in order, and returns
+ *   their number (out may equal idx).
+ * box_wide: one ray against N boxes (a wide node's children). */
+#define LANES_KERNELS_BOX(X)                                                               \
+    X(COUNTED, size_t, box_packet,                                                         \
+      (const lanes_rays *rays, const uint32_t *idx, size_t n, const lanes_box *box,        \
+       uint32_t *hit, float *tentry, lanes_lane_stats *stats),                             \
+      (rays, idx, n, box, hit, tentry))                                                    \
+    X(COUNTED, size_t, box_partition,                                                      \
+      (const lanes_rays *rays, const uint32_t *idx, size_t n, const lanes_box *box,        \
+       uint32_t *out, lanes_lane_stats *stats),                                            \
+      (rays, idx, n, box, out))                                                            \
+    X(COUNTED, size_t, box_wide,                                                           \
+      (const lanes_ray *ray, const lanes_boxes *boxes, size_t n, uint32_t *hit,            \
+       float *tentry, lanes_lane_stats *stats),                                            \
+      (ray, boxes, n, hit, tentry))
+
+/* triangle_kernels.c, per algorithm
+ * tri_packet: N rays against one triangle: per-ray t, u, v for hits only.
+ * tri_packet_any: the same for occlusion: hit bits, no t/u/v.
+ * tri_wide: one ray against N triangles: per-triangle results, hits only.
+ * tri_wide_closest: one ray against N triangles, closest hit: the index of
+ *   the nearest hit (ties: the lowest index) or -1, and its t, u, v.
+ * tri_wide_any: one ray against N triangles, occlusion: stops at the first
+ *   vector holding a hit. */
+#define LANES_KERNELS_TRI(X)                                                               \
+    X(PER_ALGO, size_t, tri_packet,                                                        \
+      (const lanes_rays *rays, const uint32_t *idx, size_t n, const lanes_triangle *tri,   \
+       uint32_t *hit, lanes_tri_hits *out, lanes_lane_stats *stats),                       \
+      (rays, idx, n, tri, hit, out))                                                       \
+    X(PER_ALGO, size_t, tri_packet_any,                                                    \
+      (const lanes_rays *rays, const uint32_t *idx, size_t n, const lanes_triangle *tri,   \
+       uint32_t *hit, lanes_lane_stats *stats),                                            \
+      (rays, idx, n, tri, hit))                                                            \
+    X(PER_ALGO, size_t, tri_wide,                                                          \
+      (const lanes_ray *ray, const lanes_triangles *tris, size_t n, uint32_t *hit,         \
+       lanes_tri_hits *out, lanes_lane_stats *stats),                                      \
+      (ray, tris, n, hit, out))                                                            \
+    X(PER_ALGO, long, tri_wide_closest,                                                    \
+      (const lanes_ray *ray, const lanes_triangles *tris, size_t n, float *t, float *u,    \
+       float *v, lanes_lane_stats *stats),                                                 \
+      (ray, tris, n, t, u, v))                                                             \
+    X(PER_ALGO, bool, tri_wide_any,                                                        \
+      (const lanes_ray *ray, const lanes_triangles *tris, size_t n, lanes_lane_stats *stats), \
+      (ray, tris, n))
+
+/* frustum_kernels.c
+ * frustum_build: the frustum of rays idx[0..n-1] (all of 0..n-1 when idx is
+ *   NULL), SIMD across the rays.
+ * frustum_boxes, frustum_tris: culling, SIMD across primitives: bit i set =
+ *   primitive i may be hit by some ray of the frustum; clear = no ray can
+ *   hit it. Return the number of bits set. */
+#define LANES_KERNELS_FRUSTUM(X)                                                           \
+    X(PLAIN, void, frustum_build,                                                          \
+      (const lanes_rays *rays, const uint32_t *idx, size_t n, lanes_frustum *f), ())       \
+    X(COUNTED, size_t, frustum_boxes,                                                      \
+      (const lanes_frustum *f, const lanes_boxes *boxes, size_t n, lanes_cull_method method, \
+       uint32_t *keep, lanes_lane_stats *stats),                                           \
+      (f, boxes, n, method, keep))                                                         \
+    X(COUNTED, size_t, frustum_tris,                                                       \
+      (const lanes_frustum *f, const lanes_triangles *tris, size_t n,                      \
+       lanes_cull_method method, uint32_t *keep, lanes_lane_stats *stats),                 \
+      (f, tris, n, method, keep))
+
+/* traverse_kernels.c: single-ray traversal of n prepared rays
+ * (lanes_ray_prepare_rcp), one after the other. The wide form reads a wide
+ * BVH of the table's wide_width children (SIMD across a node's children and
+ * across a leaf's triangles); the BVH2 form visits two children at a time,
+ * as the thesis' "single" baseline, and tests leaf triangles with the wide
+ * triangle kernel. */
+#define LANES_KERNELS_TRAVERSE(X)                                                          \
+    X(COUNTED_VOID, void, trace_wide,                                                      \
+      (const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,    \
+       const lanes_ray *rays, size_t n, lanes_hit *hits, lanes_trace_stats *stats),        \
+      (w, b, accuracy, rays, n, hits))                                                     \
+    X(COUNTED_VOID, void, occluded_wide,                                                   \
+      (const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,    \
+       const lanes_ray *rays, size_t n, uint8_t *occluded, lanes_trace_stats *stats),      \
+      (w, b, accuracy, rays, n, occluded))                                                 \
+    X(COUNTED_VOID, void, trace_bvh2,                                                      \
+      (const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
+      (b, accuracy, rays, n, hits))                                                        \
+    X(COUNTED_VOID, void, occluded_bvh2,                                                   \
+      (const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
+      (b, accuracy, rays, n, occluded))
+
+/* packet_kernels.c: one packet of rays->count (<= LANES_PACKET_MAX_RAYS)
+ * prepared rays through the BVH2. Closest hit: each ray's tfar shrinks to
+ * its hit distance, and prim[i], u[i], v[i] are written for rays that hit
+ * (prim must be LANES_NO_HIT on entry). Occlusion: occluded[i] is set to 1
+ * for rays that hit anything (and their tfar to -inf); u, v, prim may be
+ * NULL. */
+#define LANES_KERNELS_PACKET(X)                                                            \
+    X(COUNTED_VOID, void, trace_packet,                                                    \
+      (const struct lanes_bvh2 *b, const lanes_packet_options *opt, lanes_rays *rays,      \
+       uint32_t *prim, float *u, float *v, uint8_t *occluded, lanes_packet_stats *stats),  \
+      (b, opt, rays, prim, u, v, occluded))
+
+#define LANES_KERNELS(X)                                                                   \
+    LANES_KERNELS_RAY(X)                                                                   \
+    LANES_KERNELS_BOX(X)                                                                   \
+    LANES_KERNELS_TRI(X)                                                                   \
+    LANES_KERNELS_FRUSTUM(X)                                                               \
+    LANES_KERNELS_TRAVERSE(X)                                                              \
+    LANES_KERNELS_PACKET(X)
+
+/* The lanes_kernels member of a row. */
+#define LANES_KERNEL_MEMBER(kind, ret, name, params, args) LANES_KERNEL_MEMBER_##kind(ret, name, params)
+#define LANES_KERNEL_MEMBER_PLAIN(ret, name, params) ret(*name) params;
+#define LANES_KERNEL_MEMBER_COUNTED(ret, name, params) ret(*name) params;
+#define LANES_KERNEL_MEMBER_COUNTED_VOID(ret, name, params) ret(*name) params;
+#define LANES_KERNEL_MEMBER_PER_ALGO(ret, name, params) ret(*name[LANES_TRI_ALGO_COUNT]) params;
+
+#endif
