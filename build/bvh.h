@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #include "build/scene.h"
-#include "trace/kernels.h"
+#include "build/layout.h"
 
 /* Every root-to-leaf path of a BVH2 built here has at most this many nodes
  * (leaf included), so traversal stacks of this size never overflow. The

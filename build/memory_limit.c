@@ -122,3 +122,50 @@ lanes_memory_limit lanes_memory_limit_read(void)
     double physical = pages > 0 && page > 0 ? (double)pages * (double)page : INFINITY;
     return lanes_memory_limit_from("/proc/self/cgroup", "/sys/fs/cgroup", physical);
 }
+
+const char *lanes_memory_size_text(char *buf, size_t size, double bytes)
+{
+    static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+    int u = 0;
+    while (bytes >= 1024.0 && u < 6) bytes /= 1024.0, u++;
+    snprintf(buf, size, u ? "%.1f %s" : "%.0f %s", bytes, units[u]);
+    return buf;
+}
+
+/* What `limit` allows, as "this machine has 23.4 GiB of memory"; false,
+ * with the message, when LANES_MEMORY_LIMIT is not a size. */
+static bool describe(const lanes_memory_limit *limit, char *note, size_t size, lanes_error *err)
+{
+    if (limit->bad_env) {
+        lanes_error_set(err, "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
+                        limit->bad_env);
+        return false;
+    }
+    static const char *const has[] = {
+        [LANES_MEMORY_PHYSICAL] = "this machine has",
+        [LANES_MEMORY_CGROUP] = "this process's cgroup allows it",
+        [LANES_MEMORY_ENV] = "LANES_MEMORY_LIMIT allows",
+    };
+    char have[32];
+    snprintf(note, size, "%s %s of memory", has[limit->source], lanes_memory_size_text(have, sizeof have, limit->bytes));
+    return true;
+}
+
+bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
+{
+    lanes_memory_limit limit = lanes_memory_limit_read();
+    char note[96], need[32];
+    if (!describe(&limit, note, sizeof note, err)) return false;
+    if (bytes <= limit.bytes) return true;
+    lanes_error_set(err, "%s needs about %s; %s", what, lanes_memory_size_text(need, sizeof need, bytes), note);
+    return false;
+}
+
+bool lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err)
+{
+    lanes_memory_limit limit = lanes_memory_limit_read();
+    if (!describe(&limit, scene->budget_note, sizeof scene->budget_note, err)) return false;
+    const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    scene->triangle_budget = (size_t)fmin(floor(limit.bytes / per_triangle), (double)LANES_SCENE_MAX_TRIANGLES);
+    return true;
+}

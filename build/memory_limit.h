@@ -10,6 +10,9 @@
 #define LANES_BUILD_MEMORY_LIMIT_H
 
 #include <stdbool.h>
+#include <stddef.h>
+
+#include "build/scene.h"
 
 typedef enum lanes_memory_source {
     LANES_MEMORY_PHYSICAL, /* the machine's memory */
@@ -34,6 +37,25 @@ lanes_memory_limit lanes_memory_limit_read(void);
  * own): proc_cgroup in the format of /proc/self/cgroup, cgroup_root where
  * the hierarchies are mounted, physical the machine's memory in bytes. */
 lanes_memory_limit lanes_memory_limit_from(const char *proc_cgroup, const char *cgroup_root, double physical);
+
+/* false, with "<what> needs about X GiB; this machine has Y GiB of memory"
+ * (or what limits it instead: a cgroup, LANES_MEMORY_LIMIT), when bytes
+ * exceed what lanes_memory_limit_read says this process may use:
+ * allocations that large may succeed (Linux overcommits) and end in the OOM
+ * killer instead. Also false, with a message, when LANES_MEMORY_LIMIT is
+ * set to something that is not a size. */
+bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
+
+/* The loaders' policy for a scene they are about to fill, which is loaded
+ * to be traced: a triangle budget (scene->triangle_budget, budget_note)
+ * from what the scene and its BVHs need per triangle and what this process
+ * may use, read once here rather than on every append. False, with a
+ * message, when LANES_MEMORY_LIMIT is not a size. */
+bool lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err);
+
+/* "29.2 GiB", "9.4 MiB": one decimal in the largest unit that keeps a
+ * leading digit. Returns buf. */
+const char *lanes_memory_size_text(char *buf, size_t size, double bytes);
 
 /* A size as LANES_MEMORY_LIMIT takes it; false for anything else (empty,
  * negative, trailing text, zero). */

@@ -92,59 +92,6 @@ static bool grow(void **array, size_t *cap, size_t need, size_t size)
     return true;
 }
 
-/* "29.2 GiB", "9.4 MiB": one decimal in the largest unit that keeps a
- * leading digit. */
-static const char *size_text(char *buf, size_t size, double bytes)
-{
-    static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
-    int u = 0;
-    while (bytes >= 1024.0 && u < 6) bytes /= 1024.0, u++;
-    snprintf(buf, size, u ? "%.1f %s" : "%.0f %s", bytes, units[u]);
-    return buf;
-}
-
-/* Why `what` (needing `bytes`) cannot have the memory `limit` allows. */
-static void refuse(const lanes_memory_limit *limit, const char *what, double bytes, lanes_error *err)
-{
-    if (limit->bad_env) {
-        lanes_error_set(err, "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
-                        limit->bad_env);
-        return;
-    }
-    static const char *const has[] = {
-        [LANES_MEMORY_PHYSICAL] = "this machine has",
-        [LANES_MEMORY_CGROUP] = "this process's cgroup allows it",
-        [LANES_MEMORY_ENV] = "LANES_MEMORY_LIMIT allows",
-    };
-    char need[32], have[32];
-    lanes_error_set(err, "%s needs about %s; %s %s of memory", what, size_text(need, sizeof need, bytes),
-                    has[limit->source], size_text(have, sizeof have, limit->bytes));
-}
-
-bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
-{
-    lanes_memory_limit limit = lanes_memory_limit_read();
-    if (!limit.bad_env && bytes <= limit.bytes) return true;
-    refuse(&limit, what, bytes, err);
-    return false;
-}
-
-/* A scene is loaded to be traced: whether it and its BVHs fit at this count. */
-static bool traced_scene_fits(lanes_scene *scene, size_t triangles, lanes_error *err)
-{
-    if (triangles <= scene->triangles_that_fit) return true;
-    const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
-    lanes_memory_limit limit = lanes_memory_limit_read();
-    if (!limit.bad_env)
-        scene->triangles_that_fit =
-            (size_t)fmin(floor(limit.bytes / per_triangle), (double)LANES_SCENE_MAX_TRIANGLES);
-    if (triangles <= scene->triangles_that_fit) return true;
-    char what[80];
-    snprintf(what, sizeof what, "a scene of %zu triangles (to load and trace)", triangles);
-    refuse(&limit, what, (double)triangles * per_triangle, err);
-    return false;
-}
-
 bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
 {
     size_t n = scene->triangle_count;
@@ -155,9 +102,15 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
     }
     size_t need = n + extra;
     /* Refuse a scene while it is still small if its BVHs will not fit,
-     * rather than after filling the machine; at every count, not only when
-     * the arrays grow, since they grow by doubling. */
-    if (!traced_scene_fits(scene, need, err)) return false;
+     * rather than after filling the machine. */
+    if (scene->budget_note[0] && need > scene->triangle_budget) {
+        char bytes[32];
+        lanes_memory_size_text(bytes, sizeof bytes,
+                               (double)need * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE));
+        lanes_error_set(err, "a scene of %zu triangles (to load and trace) needs about %s; %s", need, bytes,
+                        scene->budget_note);
+        return false;
+    }
     if (need <= scene->triangle_capacity)
         return true;
     /* Both arrays share one capacity; grow a copy of it for each so a

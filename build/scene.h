@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "trace/accuracy.h"
+#include "build/accuracy.h"
 
 typedef enum lanes_material_kind {
     LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo */
@@ -71,10 +71,13 @@ typedef struct lanes_scene {
     size_t material_capacity;
     size_t point_light_capacity;
     size_t area_light_capacity;
-    /* The most triangles that fit in memory with their BVHs, read at the
-     * first lanes_scene_reserve_triangles (0: not read yet), so that
-     * appending one triangle at a time does not read the limit each time. */
-    size_t triangles_that_fit;
+    /* The loaders' memory policy (lanes_scene_limit_to_memory, in
+     * build/memory_limit.h): at most triangle_budget triangles, because
+     * budget_note ("this machine has 23.4 GiB of memory"); an empty note:
+     * no policy, only LANES_SCENE_MAX_TRIANGLES. The append path only
+     * compares. */
+    size_t triangle_budget;
+    char budget_note[96];
 } lanes_scene;
 
 /* Errors from loaders: which file, which line (0: none), what is wrong. */
@@ -87,20 +90,12 @@ typedef struct lanes_error {
 #define LANES_SCENE_MAX_TRIANGLES ((size_t)1 << 31)
 
 /* Memory per triangle, for refusing absurd sizes before the kernel's OOM
- * killer does (lanes_scene_reserve_triangles checks both, at every count,
- * since a scene is loaded to be traced): a scene holds 9 floats and a material index;
+ * killer does (the loaders' budget, lanes_scene_limit_to_memory, counts
+ * both, since a scene is loaded to be traced): a scene holds 9 floats and a material index;
  * building its BVH2 and wide BVH peaks at about 185 bytes more (measured:
  * `lanes render` of 13.1M triangles, 2.95 GB resident). */
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
 #define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
-
-/* false, with "<what> needs about X GiB; this machine has Y GiB of memory"
- * (or what limits it instead: a cgroup, LANES_MEMORY_LIMIT), when bytes
- * exceed what lanes_memory_limit_read (build/memory_limit.h) says this
- * process may use: allocations that large may succeed (Linux overcommits)
- * and end in the OOM killer instead. Also false, with a message, when
- * LANES_MEMORY_LIMIT is set to something that is not a size. */
-bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
 
 
 /* Formats err->message like snprintf (truncated to fit). err may be NULL. */
@@ -123,8 +118,10 @@ void lanes_scene_free(lanes_scene *scene);
 void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3]);
 
 /* Append helpers. They grow the arrays geometrically with overflow-checked
- * sizes, refuse more than LANES_SCENE_MAX_TRIANGLES triangles, and on
- * failure leave the scene unchanged and return false with a message. */
+ * sizes, refuse more than LANES_SCENE_MAX_TRIANGLES triangles or the
+ * scene's triangle_budget (checked at every count, not only when the arrays
+ * grow: they grow by doubling), and on failure leave the scene unchanged
+ * and return false with a message. */
 bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err);
 bool lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
                               lanes_error *err);

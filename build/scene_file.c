@@ -8,6 +8,7 @@
 
 #include "build/scene_file.h"
 
+#include "build/memory_limit.h"
 #include "build/mesh_import.h"
 #include "build/scenes_builtin.h"
 
@@ -857,6 +858,7 @@ bool lanes_scene_file_parse(const char *text, size_t len, const char *name, cons
                             lanes_scene *out, lanes_error *err)
 {
     lanes_scene_init(out);
+    if (!lanes_scene_limit_to_memory(out, err)) return false;
     /* A UTF-8 byte order mark is legal in a file but not to cJSON. */
     size_t skip = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;
     ctx c = {name, text + skip, len - skip, base_dir, out, err, {{0}}, 0};

@@ -5,6 +5,7 @@
 
 #include "build/scene_load.h"
 
+#include "build/memory_limit.h"
 #include "build/mesh_import.h"
 #include "build/scene_file.h"
 #include "build/scenes_builtin.h"
@@ -26,6 +27,7 @@ static bool ends_with_ci(const char *s, const char *suffix)
 static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
 {
     lanes_scene_init(out);
+    if (!lanes_scene_limit_to_memory(out, err)) return false;
     const char *slash = strrchr(path, '/');
     snprintf(out->name, sizeof out->name, "%s", slash ? slash + 1 : path);
     lanes_material grey;

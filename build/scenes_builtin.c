@@ -7,6 +7,7 @@
 
 #include "build/scenes_builtin.h"
 
+#include "build/memory_limit.h"
 #include "build/mesh_import.h"
 
 #include <math.h>
@@ -1296,6 +1297,7 @@ const lanes_builtin_info *lanes_builtin_scene_info(size_t i)
 bool lanes_builtin_scene(const char *name, lanes_scene *out, lanes_error *err)
 {
     lanes_scene_init(out);
+    if (!lanes_scene_limit_to_memory(out, err)) return false;
     for (size_t i = 0; i < N_SCENES; i++) {
         if (strcmp(name, scenes[i].info.name) != 0)
             continue;

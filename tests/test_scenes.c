@@ -166,6 +166,10 @@ static void test_container(void)
     CHECK(!lanes_memory_fits("an exabyte", 1e18, &err) && strstr(err.message, "an exabyte needs about") &&
               strstr(err.message, "of memory"),
           "an exabyte refused: %s", err.message);
+    /* The loaders apply the memory policy; a scene built by hand gets it
+     * when it asks. */
+    CHECK(lanes_scene_limit_to_memory(&s, &err) && s.triangle_budget > s.triangle_count, "memory budget: %s",
+          err.message);
     size_t most = LANES_SCENE_MAX_TRIANGLES - s.triangle_count;
     double most_bytes = (double)LANES_SCENE_MAX_TRIANGLES *
                         (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);

@@ -14,9 +14,10 @@
 #include <string.h>
 
 #include "build/bvh.h"
+#include "build/memory_limit.h"
 #include "build/scene.h"
 #include "simd/isa.h"
-#include "trace/accuracy.h"
+#include "build/accuracy.h"
 #include "trace/kernels.h"
 
 #define LANES_VERSION_TEXT_(a, b, c) #a "." #b "." #c

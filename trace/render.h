@@ -29,7 +29,7 @@ int lanes_scheme_from_name(const char *name);
 typedef struct lanes_render_options {
     lanes_isa isa;
     lanes_scheme scheme;
-    lanes_accuracy accuracy; /* see trace/accuracy.h; default LANES_ACCURACY_FROM_SCENE */
+    lanes_accuracy accuracy; /* see build/accuracy.h; default LANES_ACCURACY_FROM_SCENE */
     int width, height;
     int spp;             /* samples per pixel, stratified */
     int threads;         /* 0: all cores */

@@ -12,7 +12,7 @@
 #include <stdio.h>
 
 #include "build/scene.h"
-#include "trace/accuracy.h"
+#include "build/accuracy.h"
 
 typedef struct lanes_scene_plan {
     /* what the scene holds */

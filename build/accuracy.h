@@ -32,9 +32,10 @@
  * In every mode 1/±0 is ±inf and the slab test orders its min and max so
  * that the NaN of 0 * inf never reaches a result (see box_core.h).
  *
- * Baseline header: no intrinsics. */
-#ifndef LANES_TRACE_ACCURACY_H
-#define LANES_TRACE_ACCURACY_H
+ * Here, below trace/, because a scene file names the mode it wants
+ * (build/scene_file.c reads the names). Baseline header: no intrinsics. */
+#ifndef LANES_BUILD_ACCURACY_H
+#define LANES_BUILD_ACCURACY_H
 
 #include <string.h>
 
