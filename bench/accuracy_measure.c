@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "build/mesh_import.h"
+#include "build/parallel.h"
 #include "build/scenes_builtin.h"
 #include "trace/render.h"
 #include "trace/shading.h"
@@ -67,71 +68,11 @@ static float to_float(double x)
     return f;
 }
 
-int acc_cpu_count(void)
-{
-    cpu_set_t set;
-    if (sched_getaffinity(0, sizeof set, &set) == 0) {
-        int n = CPU_COUNT(&set);
-        if (n > 0) return n;
-    }
-    return 1;
-}
-
 static double now_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
-/* Items 0..items-1 handed out one at a time to `threads` workers (the
- * caller is worker 0). Results must depend on the item only, never on the
- * worker, so that counts are the same at any thread count. */
-typedef struct {
-    void (*fn)(void *ctx, size_t item, int worker);
-    void *ctx;
-    size_t items;
-    atomic_size_t next;
-} par_job;
-
-typedef struct {
-    par_job *job;
-    int worker;
-} par_arg;
-
-static void *par_worker(void *p)
-{
-    par_arg *a = p;
-    for (;;) {
-        size_t i = atomic_fetch_add(&a->job->next, 1);
-        if (i >= a->job->items) break;
-        a->job->fn(a->job->ctx, i, a->worker);
-    }
-    return NULL;
-}
-
-static int resolve_threads(int threads)
-{
-    if (threads <= 0) threads = acc_cpu_count();
-    return threads > 64 ? 64 : threads;
-}
-
-static void parallel_for(int threads, size_t items, void (*fn)(void *, size_t, int), void *ctx)
-{
-    par_job job = {.fn = fn, .ctx = ctx, .items = items};
-    atomic_init(&job.next, 0);
-    pthread_t tid[64];
-    par_arg args[64];
-    int started = 0;
-    threads = resolve_threads(threads);
-    if ((size_t)threads > items) threads = items > 0 ? (int)items : 1;
-    for (int t = 0; t < threads; t++) args[t] = (par_arg){&job, t};
-    for (int t = 1; t < threads; t++) {
-        if (pthread_create(&tid[t], NULL, par_worker, &args[t]) != 0) break;
-        started = t;
-    }
-    par_worker(&args[0]);
-    for (int t = 1; t <= started; t++) pthread_join(tid[t], NULL);
 }
 
 /* ---- closedness ------------------------------------------------------ */
@@ -449,7 +390,7 @@ static bool find_points(acc_world *w, int threads, lanes_error *err)
      * rounds; one whose rounding left no interior gives up after 16. */
     for (int round = 0; round < 16 && w->point_count < ACC_POINTS; round++) {
         c.base = (uint64_t)round * POINT_ROUND;
-        parallel_for(threads, POINT_ROUND / POINT_BLOCK, point_block, &c);
+        lanes_parallel_for(threads, POINT_ROUND / POINT_BLOCK, point_block, &c);
         for (size_t j = 0; j < POINT_ROUND && w->point_count < ACC_POINTS; j++)
             if (c.inside[j]) memcpy(w->points[w->point_count++], c.cand[j], sizeof c.cand[j]);
         w->point_candidates += POINT_ROUND;
@@ -665,7 +606,7 @@ bool acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err)
     size_t limit = 32 * count + MISS_ROUND;
     while (w->miss_count < count && w->miss_attempts < limit) {
         c.base = w->miss_attempts;
-        parallel_for(threads, MISS_ROUND / MISS_BLOCK, miss_block, &c);
+        lanes_parallel_for(threads, MISS_ROUND / MISS_BLOCK, miss_block, &c);
         for (size_t j = 0; j < MISS_ROUND && w->miss_count < count; j++)
             if (c.keep[j]) w->misses[w->miss_count++] = c.cand[j];
         w->miss_attempts += MISS_ROUND;
@@ -734,7 +675,7 @@ typedef struct {
     const acc_job *job;
     const lanes_wbvh *wide;
     lanes_precision prec;
-    worker_state *ws[64];
+    worker_state *ws[LANES_PARALLEL_MAX_THREADS];
     bool misses; /* this pass traces the world's misses, not the leak rays */
 } measure_ctx;
 
@@ -878,7 +819,7 @@ bool acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_
         lanes_error_set(err, "%s at %g: no interior points", w->name, w->translation);
         return false;
     }
-    int threads = resolve_threads(job->threads);
+    int threads = lanes_parallel_threads(job->threads);
     bool ok = true;
     for (int t = 0; t < threads; t++) {
         c.ws[t] = calloc(1, sizeof *c.ws[t]);
@@ -890,10 +831,10 @@ bool acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_
     }
     if (ok) {
         c.misses = false;
-        parallel_for(threads, (size_t)((job->count + CHUNK - 1) / CHUNK), measure_chunk, &c);
+        lanes_parallel_for(threads, (size_t)((job->count + CHUNK - 1) / CHUNK), measure_chunk, &c);
         if (job->false_hits && w->miss_count > 0) {
             c.misses = true;
-            parallel_for(threads, (w->miss_count + CHUNK - 1) / CHUNK, measure_chunk, &c);
+            lanes_parallel_for(threads, (w->miss_count + CHUNK - 1) / CHUNK, measure_chunk, &c);
         }
     }
     for (int t = 0; t < threads; t++) {

@@ -162,7 +162,5 @@ uint64_t acc_ulp_bin_low(int bin);
  * lie (exact below ACC_ULP_EXACT); NaN with no samples. */
 double acc_ulp_percentile(const acc_counts *c, double p);
 
-/* Number of cores the process may use. */
-int acc_cpu_count(void);
 
 #endif

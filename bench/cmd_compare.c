@@ -25,6 +25,8 @@
 #include "bench/cli_common.h"
 #include "bench/embree_adapter.h"
 #include "build/bvh.h"
+#include "build/camera.h"
+#include "build/parallel.h"
 #include "build/scene.h"
 #include "build/scene_load.h"
 #include "simd/isa.h"
@@ -44,114 +46,36 @@ static const char *const kind_names[KIND_COUNT] = {"primary", "shadow", "diffuse
 
 /* ---- threads ------------------------------------------------------------ */
 
+/* Work on rays [begin, end) of a run. */
 typedef void (*work_fn)(void *ctx, size_t begin, size_t end);
 
-struct pool;
+/* Persistent pinned pools (build/parallel.h): creating threads per
+ * repetition would time thread start-up, and an unpinned thread may
+ * migrate mid-run. Items are CHUNKs of rays. */
 typedef struct {
-    struct pool *p;
-    int index;
-} worker_arg;
-
-/* Persistent pinned workers: creating threads per repetition would time
- * thread start-up, and an unpinned thread may migrate mid-run. */
-typedef struct pool {
-    int threads;
-    int cpus[MAX_THREADS];
-    pthread_t tid[MAX_THREADS];
-    worker_arg args[MAX_THREADS];
-    pthread_barrier_t start, done;
     work_fn fn;
     void *ctx;
     size_t n;
-    atomic_size_t next;
-    bool quit;
-} pool;
+} chunked_run;
 
-static void pin_self(int cpu)
+static void chunk_task(void *p, size_t item, int worker)
 {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    CPU_SET(cpu, &set);
-    pthread_setaffinity_np(pthread_self(), sizeof set, &set);
-}
-
-static void pool_work(pool *p)
-{
+    chunked_run *r = p;
+    (void)worker;
+    size_t b = item * CHUNK, e = b + CHUNK < r->n ? b + CHUNK : r->n;
     unsigned csr = lanes_fp_fast_enter();
-    for (;;) {
-        size_t b = atomic_fetch_add(&p->next, CHUNK);
-        if (b >= p->n) break;
-        size_t e = b + CHUNK < p->n ? b + CHUNK : p->n;
-        p->fn(p->ctx, b, e);
-    }
+    r->fn(r->ctx, b, e);
     lanes_fp_restore(csr);
 }
 
-static void *pool_main(void *arg)
+/* Seconds from the moment the workers are released to the moment the last
+ * item is done. */
+static double pool_run(lanes_pool *p, work_fn fn, void *ctx, size_t n)
 {
-    worker_arg *w = arg;
-    pool *p = w->p;
-    pin_self(p->cpus[w->index]);
-    for (;;) {
-        pthread_barrier_wait(&p->start);
-        if (p->quit) break;
-        pool_work(p);
-        pthread_barrier_wait(&p->done);
-    }
-    return NULL;
-}
-
-/* The calling thread is worker 0 and must already be pinned to cpus[0]. */
-static bool pool_start(pool *p, int threads, const int *cpus, int ncpus)
-{
-    memset(p, 0, sizeof *p);
-    p->threads = threads;
-    for (int i = 0; i < threads; i++) p->cpus[i] = cpus[i % ncpus];
-    if (threads == 1) return true;
-    pthread_barrier_init(&p->start, NULL, (unsigned)threads);
-    pthread_barrier_init(&p->done, NULL, (unsigned)threads);
-    for (int i = 1; i < threads; i++) {
-        p->args[i] = (worker_arg){p, i};
-        /* On failure the caller exits: the workers already started are
-         * parked on the barrier and end with the process. */
-        if (pthread_create(&p->tid[i], NULL, pool_main, &p->args[i]) != 0) return false;
-    }
-    return true;
-}
-
-static void pool_stop(pool *p)
-{
-    if (p->threads <= 1) return;
-    p->quit = true;
-    pthread_barrier_wait(&p->start);
-    for (int i = 1; i < p->threads; i++) pthread_join(p->tid[i], NULL);
-    pthread_barrier_destroy(&p->start);
-    pthread_barrier_destroy(&p->done);
-}
-
-/* Seconds from the moment every worker is released to the moment the last
- * one is done. */
-static double pool_run(pool *p, work_fn fn, void *ctx, size_t n)
-{
-    p->fn = fn;
-    p->ctx = ctx;
-    p->n = n;
-    atomic_store(&p->next, 0);
-    uint64_t t0, t1;
-    if (p->threads == 1) {
-        t0 = cli_now_ns();
-        pool_work(p);
-        t1 = cli_now_ns();
-    } else {
-        /* The clock starts before the workers are released: once they are,
-         * this thread may be preempted while they do all the work. */
-        t0 = cli_now_ns();
-        pthread_barrier_wait(&p->start);
-        pool_work(p);
-        pthread_barrier_wait(&p->done);
-        t1 = cli_now_ns();
-    }
-    return (double)(t1 - t0) * 1e-9;
+    chunked_run r = {fn, ctx, n};
+    uint64_t t0 = cli_now_ns();
+    lanes_pool_run(p, (n + CHUNK - 1) / CHUNK, chunk_task, &r);
+    return (double)(cli_now_ns() - t0) * 1e-9;
 }
 
 /* ---- the two engines as work functions --------------------------------- */
@@ -273,26 +197,6 @@ static void embree_work(void *ctx, size_t b, size_t e)
 
 /* ---- rays --------------------------------------------------------------- */
 
-typedef struct {
-    float x, y, z;
-} vec3;
-
-static vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
-static vec3 v3_load(const float *p) { return (vec3){p[0], p[1], p[2]}; }
-static vec3 add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-static vec3 sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static vec3 scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
-static float dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static vec3 cross(vec3 a, vec3 b)
-{
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-static vec3 normalize(vec3 a)
-{
-    float l = sqrtf(dot(a, a));
-    return l > 0.0f ? scale(a, 1.0f / l) : a;
-}
-
 static uint64_t splitmix(uint64_t *s)
 {
     uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
@@ -318,13 +222,7 @@ static int morton_x(int m) { return (m & 1) | ((m >> 1) & 2) | ((m >> 2) & 4); }
  * pixel blocks, the order a packet tracer would use. */
 static lanes_ray *camera_rays(const lanes_scene *s, int w, int h, size_t *count)
 {
-    const lanes_camera *c = &s->camera;
-    vec3 eye = v3_load(c->eye);
-    vec3 fwd = normalize(sub(v3_load(c->target), eye));
-    vec3 right = normalize(cross(fwd, v3_load(c->up)));
-    vec3 up = cross(right, fwd);
-    float aspect = (float)w / (float)h;
-    float tan_half = tanf(c->fov_y_degrees * 3.14159265358979323846f / 360.0f);
+    lanes_view view = lanes_view_make(&s->camera, w, h);
     lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
     if (!rays) return NULL;
     size_t n = 0;
@@ -333,10 +231,8 @@ static lanes_ray *camera_rays(const lanes_scene *s, int w, int h, size_t *count)
             for (int m = 0; m < 64; m++) {
                 int x = tx + morton_x(m), y = ty + morton_x(m >> 1);
                 if (x >= w || y >= h) continue;
-                float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
-                float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
-                vec3 d = normalize(add(fwd, add(scale(right, px), scale(up, py))));
-                rays[n++] = make_ray(eye, d, 0.0f, INFINITY);
+                vec3 d = v3_normalize(lanes_view_dir(&view, (float)x + 0.5f, (float)y + 0.5f));
+                rays[n++] = make_ray(view.eye, d, 0.0f, INFINITY);
             }
     *count = n;
     return rays;
@@ -355,19 +251,19 @@ static surface_point *surface_points(const lanes_scene *s, const lanes_ray *rays
 {
     float lo[3], hi[3];
     lanes_scene_bounds(s, lo, hi);
-    vec3 diag = sub(v3_load(hi), v3_load(lo));
-    float eps = 1e-5f * sqrtf(dot(diag, diag)) + 1e-6f;
+    vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
+    float eps = 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
     surface_point *pts = malloc((n ? n : 1) * sizeof *pts);
     if (!pts) return NULL;
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
         if (hits[i].prim == LANES_NO_HIT) continue;
         const float *v = s->verts + (size_t)hits[i].prim * 9;
-        vec3 v0 = v3_load(v), e1 = sub(v3_load(v + 3), v0), e2 = sub(v3_load(v + 6), v0);
-        vec3 p = add(v0, add(scale(e1, hits[i].u), scale(e2, hits[i].v)));
-        vec3 nrm = normalize(cross(e1, e2));
-        if (dot(nrm, v3_load(rays[i].d)) > 0.0f) nrm = scale(nrm, -1.0f);
-        pts[m++] = (surface_point){add(p, scale(nrm, eps)), nrm, (uint32_t)i};
+        vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
+        vec3 p = v3_add(v0, v3_add(v3_scale(e1, hits[i].u), v3_scale(e2, hits[i].v)));
+        vec3 nrm = v3_normalize(v3_cross(e1, e2));
+        if (v3_dot(nrm, v3_load(rays[i].d)) > 0.0f) nrm = v3_scale(nrm, -1.0f);
+        pts[m++] = (surface_point){v3_add(p, v3_scale(nrm, eps)), nrm, (uint32_t)i};
     }
     *count = m;
     return pts;
@@ -385,19 +281,19 @@ static lanes_ray *shadow_rays(const lanes_scene *s, const surface_point *pts, si
     } else {
         float lo[3], hi[3];
         lanes_scene_bounds(s, lo, hi);
-        vec3 centre = scale(add(v3_load(lo), v3_load(hi)), 0.5f);
-        vec3 diag = sub(v3_load(hi), v3_load(lo));
-        light = add(centre, scale(normalize(v3_load(s->camera.up)), sqrtf(dot(diag, diag))));
+        vec3 centre = v3_scale(v3_add(v3_load(lo), v3_load(hi)), 0.5f);
+        vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
+        light = v3_add(centre, v3_scale(v3_normalize(v3_load(s->camera.up)), sqrtf(v3_dot(diag, diag))));
     }
     lanes_ray *rays = malloc((n ? n : 1) * sizeof *rays);
     if (!rays) return NULL;
     size_t m = 0;
     for (size_t i = 0; i < n; i++) {
-        vec3 to = sub(light, pts[i].origin);
-        float dist = sqrtf(dot(to, to));
+        vec3 to = v3_sub(light, pts[i].origin);
+        float dist = sqrtf(v3_dot(to, to));
         if (!(dist > 0.0f)) continue;
-        vec3 l = scale(to, 1.0f / dist);
-        if (dot(l, pts[i].n) <= 0.0f) continue;
+        vec3 l = v3_scale(to, 1.0f / dist);
+        if (v3_dot(l, pts[i].n) <= 0.0f) continue;
         rays[m++] = make_ray(pts[i].origin, l, 0.0f, dist * (1.0f - 1e-4f));
     }
     *count = m;
@@ -415,10 +311,10 @@ static lanes_ray *diffuse_rays(const surface_point *pts, size_t n)
         float r1 = rnd01(&seed), r2 = rnd01(&seed);
         vec3 nz = pts[i].n;
         vec3 a = fabsf(nz.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
-        vec3 nx = normalize(cross(a, nz)), ny = cross(nz, nx);
+        vec3 nx = v3_normalize(v3_cross(a, nz)), ny = v3_cross(nz, nx);
         float phi = 6.28318530717958647692f * r1, r = sqrtf(r2);
         float lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1.0f - r2));
-        vec3 d = normalize(add(add(scale(nx, lx), scale(ny, ly)), scale(nz, lz)));
+        vec3 d = v3_normalize(v3_add(v3_add(v3_scale(nx, lx), v3_scale(ny, ly)), v3_scale(nz, lz)));
         rays[i] = make_ray(pts[i].origin, d, 0.0f, INFINITY);
     }
     return rays;
@@ -577,7 +473,7 @@ typedef struct {
     lanes_isa isas[LANES_ISA_COUNT];
     int isa_count;
     lanes_isa ref_isa; /* traces the primary rays the secondary ones start from */
-    pool pools[2];     /* single thread, all threads */
+    lanes_pool pools[2]; /* single thread, all threads */
     int pool_count;
     results res;
     int width, height;
@@ -609,7 +505,7 @@ typedef struct {
     double seconds[2][64]; /* per pool, per repetition */
 } config;
 
-static void run_config(pool *p, config *cf, size_t n, double *seconds)
+static void run_config(lanes_pool *p, config *cf, size_t n, double *seconds)
 {
     double s;
     if (cf->embree) {
@@ -962,11 +858,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     for (int i = 0; i < c->isa_count; i++)
         if (c->isas[i] == lanes_isa_best()) c->ref_isa = c->isas[i];
 
-    /* Pinned for the whole run; restored at the end. */
-    cpu_set_t saved_affinity;
-    bool have_affinity = pthread_getaffinity_np(pthread_self(), sizeof saved_affinity,
-                                                &saved_affinity) == 0;
-    pin_self(cpus[0]);
+    /* Pinned for the whole run, the builds included: the single-thread pool
+     * pins this thread to cpus[0] until it stops. */
+    lanes_pool_start(&c->pools[0], 1, cpus, ncpus);
+    c->pool_count = 1;
 
     char features[512];
     lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
@@ -1016,11 +911,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     }
 
     /* threads */
-    if (!pool_start(&c->pools[0], 1, cpus, ncpus)) cli_fail("compare: cannot start threads");
-    c->pool_count = 1;
     if (o->threads > 1) {
-        if (!pool_start(&c->pools[1], o->threads, cpus, ncpus))
-            cli_fail("compare: cannot start %d threads", o->threads);
+        lanes_pool_start(&c->pools[1], o->threads, cpus, ncpus);
+        if (c->pools[1].threads != o->threads)
+            cli_fail("compare: could start only %d of %d threads", c->pools[1].threads, o->threads);
         c->pool_count = 2;
     }
 
@@ -1058,8 +952,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     run_kind(c, KIND_DIFFUSE, diffuse, npts);
     run_kind(c, KIND_SHUFFLED, shuffle, npts);
 
-    for (int i = 0; i < c->pool_count; i++) pool_stop(&c->pools[i]);
-    if (have_affinity) pthread_setaffinity_np(pthread_self(), sizeof saved_affinity, &saved_affinity);
+    for (int i = c->pool_count - 1; i >= 0; i--) lanes_pool_stop(&c->pools[i]);
 
     int status = 0;
     if (o->json) {

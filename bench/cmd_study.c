@@ -19,6 +19,7 @@
 #ifdef LANES_HAVE_COMPARE
 #include "bench/embree_adapter.h"
 #endif
+#include "build/camera.h"
 #include "build/scene_load.h"
 #include "trace/packet_render.h"
 #include "trace/render.h"
@@ -222,12 +223,8 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
  * lanes' packet frusta are built inside the clock. */
 static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *count)
 {
-    const lanes_camera *c = &s->camera;
-    vec3 eye = v3_load(c->eye);
-    vec3 fwd = v3_normalize(v3_sub(v3_load(c->target), eye));
-    vec3 right = v3_normalize(v3_cross(fwd, v3_load(c->up)));
-    vec3 up = v3_cross(right, fwd);
-    float tan_half = tanf(c->fov_y_degrees * LANES_PI / 360.0f), aspect = (float)w / (float)h;
+    lanes_view view = lanes_view_make(&s->camera, w, h);
+    vec3 eye = view.eye;
     lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
     if (!rays) return NULL;
     size_t n = 0;
@@ -238,9 +235,7 @@ static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *coun
                     for (int y = ty; y < ty + 4; y++)
                         for (int x = tx; x < tx + 4; x++) {
                             if (x >= w || y >= h) continue;
-                            float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
-                            float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
-                            vec3 d = v3_add(fwd, v3_add(v3_scale(right, px), v3_scale(up, py)));
+                            vec3 d = lanes_view_dir(&view, (float)x + 0.5f, (float)y + 0.5f);
                             rays[n++] = (lanes_ray){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, INFINITY};
                             lanes_ray_prepare(&rays[n - 1]);
                         }

@@ -28,7 +28,7 @@
 
 #include "build/bvh.h"
 #include "build/bvh_alloc.h"
-#include "build/bvh_pool.h"
+#include "build/parallel.h"
 
 #include <float.h>
 #include <math.h>
@@ -40,7 +40,7 @@
 
 enum {
     MAX_BINS = 256,
-    MAX_THREADS = LANES_POOL_MAX_THREADS,
+    MAX_THREADS = LANES_PARALLEL_MAX_THREADS,
     /* Work item of phases 0 and 1: big enough to amortise a fetch from the
      * shared counter, small enough to balance two to a few dozen threads. */
     BLOCK = 4096,
@@ -332,7 +332,7 @@ typedef struct builder {
     uint32_t task_size;
     size_t ntri, nprims;     /* scene triangles; those kept */
     prim_ref *buf[2];
-    pool pool;
+    lanes_pool pool;
     worker workers[MAX_THREADS];
     atomic_bool failed;
 
@@ -757,7 +757,7 @@ static bool top_level(builder *B)
     }
     if (!GROW(B->blk_bins, B->cap_blk_bins, B->nblocks * nb3)) return false;
 
-    pool_run(&B->pool, B->nblocks, top_bin_block, B);
+    lanes_pool_run(&B->pool, B->nblocks, top_bin_block, B);
 
     for (size_t i = 0; i < B->ncur; i++) {
         tnode *nd = &B->cur[i];
@@ -770,7 +770,7 @@ static bool top_level(builder *B)
         nd->nleft = nd->sah ? 0 : (nd->end - nd->begin) / 2;
     }
 
-    pool_run(&B->pool, B->nblocks, top_count_block, B);
+    lanes_pool_run(&B->pool, B->nblocks, top_count_block, B);
 
     for (size_t i = 0; i < B->ncur; i++) {
         tnode *nd = &B->cur[i];
@@ -806,7 +806,7 @@ static bool top_level(builder *B)
         if (!add_child(B, nd->begin + nl, nd->end, c + 1, nd->level + 1, &rg, &rc)) return false;
     }
 
-    pool_run(&B->pool, B->nblocks, top_scatter_block, B);
+    lanes_pool_run(&B->pool, B->nblocks, top_scatter_block, B);
 
     tnode *t = B->cur;
     B->cur = B->next;
@@ -882,13 +882,6 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int cpu_count(void)
-{
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    if (n < 1) return 1;
-    return n > MAX_THREADS ? MAX_THREADS : (int)n;
-}
-
 void lanes_bvh2_free(lanes_bvh2 *bvh)
 {
     if (!bvh) return;
@@ -958,8 +951,7 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
     B->ntri = scene->triangle_count;
     atomic_init(&B->failed, false);
     B->out = bvh;
-    int threads = opt->threads ? opt->threads : cpu_count();
-    if (threads > MAX_THREADS) threads = MAX_THREADS;
+    int threads = lanes_parallel_threads(opt->threads);
     bool ok = false;
     const char *why = "out of memory";
 
@@ -973,14 +965,14 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
         free(B);
         return fail(err, why);
     }
-    pool_start(&B->pool, threads);
+    lanes_pool_start(&B->pool, threads, NULL, 0);
     for (int i = 0; i < B->pool.threads; i++) {
         B->workers[i].bins = malloc(3 * (size_t)B->bins * sizeof(bin));
         if (!B->workers[i].bins) goto done;
     }
 
     /* Phase 0. */
-    pool_run(&B->pool, B->nblocks0, refs_block, B);
+    lanes_pool_run(&B->pool, B->nblocks0, refs_block, B);
     size_t n = 0;
     aabb geo, cent;
     aabb_empty(&geo);
@@ -1006,7 +998,7 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
     }
     B->root_buf = 0;
     if (n < B->ntri) {
-        pool_run(&B->pool, B->nblocks0, compact_block, B);
+        lanes_pool_run(&B->pool, B->nblocks0, compact_block, B);
         B->root_buf = 1;
     }
 
@@ -1041,7 +1033,7 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
         B->order[i] = (uint64_t)(UINT32_MAX - (B->tasks[i].end - B->tasks[i].begin)) << 32 | i;
     qsort(B->order, B->ntasks, sizeof *B->order, cmp_u64);
     B->nprims = n;
-    pool_run(&B->pool, B->ntasks + 1, run_task, B);
+    lanes_pool_run(&B->pool, B->ntasks + 1, run_task, B);
     if (atomic_load(&B->failed)) goto done;
 
     /* Phase 3. */
@@ -1057,7 +1049,7 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
     bvh->nodes = lanes_big_alloc(total, sizeof *bvh->nodes);
     if (!bvh->nodes) goto done;
     memcpy(bvh->nodes, B->top, B->ntop * sizeof *B->top);
-    pool_run(&B->pool, B->ntasks, finish_task, B);
+    lanes_pool_run(&B->pool, B->ntasks, finish_task, B);
 
     /* The top nodes are all interior except task roots, which the tasks
      * count; sums in task order keep the result independent of threads. */
@@ -1086,7 +1078,7 @@ bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *o
     ok = true;
 
 done:
-    pool_stop(&B->pool);
+    lanes_pool_stop(&B->pool);
     builder_free(B);
     free(B);
     if (!ok) {

@@ -18,7 +18,7 @@
 
 #include "build/bvh.h"
 #include "build/bvh_alloc.h"
-#include "build/bvh_pool.h"
+#include "build/parallel.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -236,10 +236,10 @@ bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lan
         f.sah = malloc(blocks * sizeof *f.sah);
         ok = f.sah != NULL;
         if (ok) {
-            pool p;
-            pool_start(&p, blocks > 1 && bvh->threads > 1 ? bvh->threads : 1);
-            pool_run(&p, blocks, fill_block, &f);
-            pool_stop(&p);
+            lanes_pool p;
+            lanes_pool_start(&p, blocks > 1 && bvh->threads > 1 ? bvh->threads : 1, NULL, 0);
+            lanes_pool_run(&p, blocks, fill_block, &f);
+            lanes_pool_stop(&p);
             for (size_t i = 0; i < blocks; i++) sah += f.sah[i];
             root_area = f.root_area;
         }

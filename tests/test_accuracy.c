@@ -28,6 +28,7 @@
 
 #include "bench/accuracy_measure.h"
 #include "bench/accuracy_reference.h"
+#include "build/parallel.h"
 #include "build/scenes_builtin.h"
 #include "simd/isa.h"
 
@@ -443,6 +444,6 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: test_accuracy reference | closed | leaks MESH [--rays N] [--threads N]\n");
         return 2;
     }
-    printf("%s in %.1f s on %d threads: %s\n", what, now() - t0, acc_cpu_count(), failures ? "FAILED" : "passed");
+    printf("%s in %.1f s on %d threads: %s\n", what, now() - t0, lanes_parallel_threads(0), failures ? "FAILED" : "passed");
     return failures ? 1 : 0;
 }

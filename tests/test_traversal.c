@@ -37,6 +37,7 @@
 
 #include "bench/embree_adapter.h"
 #include "build/bvh.h"
+#include "build/camera.h"
 #include "build/scene.h"
 #include "build/scene_load.h"
 #include "build/scenes_builtin.h"
@@ -736,24 +737,6 @@ static int run_brute(const char *which)
 
 /* ---- against Embree on real meshes ----------------------------------------- */
 
-typedef struct {
-    float x, y, z;
-} vec3;
-static vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
-static vec3 v3_load(const float *p) { return (vec3){p[0], p[1], p[2]}; }
-static vec3 add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-static vec3 sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static vec3 scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
-static float dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static vec3 cross(vec3 a, vec3 b)
-{
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-static vec3 normalize(vec3 a)
-{
-    float l = sqrtf(dot(a, a));
-    return l > 0.0f ? scale(a, 1.0f / l) : a;
-}
 static lanes_ray ray_of(vec3 o, vec3 d, float tnear, float tfar)
 {
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
@@ -888,10 +871,7 @@ static int run_embree(const char *name, long nrays)
      * (the engine under comparison does not choose its own inputs) */
     int w = (int)lround(sqrt((double)nrays)), h = w;
     const lanes_camera *c = &s.camera;
-    vec3 eye = v3_load(c->eye), fwd = normalize(sub(v3_load(c->target), eye));
-    vec3 right = normalize(cross(fwd, v3_load(c->up))), up = cross(right, fwd);
-    float tan_half = tanf(c->fov_y_degrees * 3.14159265f / 360.0f);
-    float aspect = c->width > 0 && c->height > 0 ? (float)c->width / (float)c->height : 1.0f;
+    lanes_view view = lanes_view_make(c, w, h);
     size_t np = (size_t)w * (size_t)h;
     lanes_ray *primary = malloc(np * sizeof *primary);
     lanes_ray *shadow = malloc(np * sizeof *shadow);
@@ -900,39 +880,37 @@ static int run_embree(const char *name, long nrays)
     uint8_t *eo = malloc(np), *lo_ = malloc(np);
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
-            float px = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * tan_half * aspect;
-            float py = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * tan_half;
             primary[(size_t)y * w + x] =
-                ray_of(eye, normalize(add(fwd, add(scale(right, px), scale(up, py)))), 0.0f, INFINITY);
+                ray_of(view.eye, v3_normalize(lanes_view_dir(&view, (float)x + 0.5f, (float)y + 0.5f)), 0.0f, INFINITY);
         }
     lanes_embree_trace1(emb, primary, np, eh);
     float blo[3], bhi[3];
     lanes_scene_bounds(&s, blo, bhi);
-    vec3 diag = sub(v3_load(bhi), v3_load(blo));
-    float eps = 1e-5f * sqrtf(dot(diag, diag)) + 1e-6f;
+    vec3 diag = v3_sub(v3_load(bhi), v3_load(blo));
+    float eps = 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
     vec3 light = s.point_light_count ? v3_load(s.point_lights[0].position)
-                                     : add(scale(add(v3_load(blo), v3_load(bhi)), 0.5f),
-                                           scale(normalize(v3_load(c->up)), sqrtf(dot(diag, diag))));
+                                     : v3_add(v3_scale(v3_add(v3_load(blo), v3_load(bhi)), 0.5f),
+                                           v3_scale(v3_normalize(v3_load(c->up)), sqrtf(v3_dot(diag, diag))));
     size_t ns = 0, nd = 0;
     uint64_t seed = 42;
     for (size_t i = 0; i < np; i++) {
         if (eh[i].prim == LANES_NO_HIT) continue;
         const float *v = s.verts + 9 * (size_t)eh[i].prim;
-        vec3 v0 = v3_load(v), e1 = sub(v3_load(v + 3), v0), e2 = sub(v3_load(v + 6), v0);
-        vec3 p = add(v0, add(scale(e1, eh[i].u), scale(e2, eh[i].v)));
-        vec3 n = normalize(cross(e1, e2));
-        if (dot(n, v3_load(primary[i].d)) > 0) n = scale(n, -1.0f);
-        vec3 o = add(p, scale(n, eps));
-        vec3 to = sub(light, o);
-        float dist = sqrtf(dot(to, to));
-        if (dist > 0 && dot(to, n) > 0) shadow[ns++] = ray_of(o, scale(to, 1.0f / dist), 0.0f, dist * (1.0f - 1e-4f));
+        vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
+        vec3 p = v3_add(v0, v3_add(v3_scale(e1, eh[i].u), v3_scale(e2, eh[i].v)));
+        vec3 n = v3_normalize(v3_cross(e1, e2));
+        if (v3_dot(n, v3_load(primary[i].d)) > 0) n = v3_scale(n, -1.0f);
+        vec3 o = v3_add(p, v3_scale(n, eps));
+        vec3 to = v3_sub(light, o);
+        float dist = sqrtf(v3_dot(to, to));
+        if (dist > 0 && v3_dot(to, n) > 0) shadow[ns++] = ray_of(o, v3_scale(to, 1.0f / dist), 0.0f, dist * (1.0f - 1e-4f));
         float r1 = (float)rnd(&seed), r2 = (float)rnd(&seed);
         vec3 a = fabsf(n.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
-        vec3 nx = normalize(cross(a, n)), ny = cross(n, nx);
+        vec3 nx = v3_normalize(v3_cross(a, n)), ny = v3_cross(n, nx);
         float phi = 6.2831853f * r1, rr = sqrtf(r2);
-        vec3 d = add(add(scale(nx, rr * cosf(phi)), scale(ny, rr * sinf(phi))),
-                     scale(n, sqrtf(fmaxf(0.0f, 1.0f - r2))));
-        diffuse[nd++] = ray_of(o, normalize(d), 0.0f, INFINITY);
+        vec3 d = v3_add(v3_add(v3_scale(nx, rr * cosf(phi)), v3_scale(ny, rr * sinf(phi))),
+                     v3_scale(n, sqrtf(fmaxf(0.0f, 1.0f - r2))));
+        diffuse[nd++] = ray_of(o, v3_normalize(d), 0.0f, INFINITY);
     }
     ray_set sets[3] = {{"primary", primary, np, false}, {"shadow", shadow, ns, true},
                        {"diffuse", diffuse, nd, false}};

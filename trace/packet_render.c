@@ -1,6 +1,9 @@
 /* The Whitted renderer on ray packets (see packet_render.h). */
 #define _DEFAULT_SOURCE /* sysconf, clock_gettime */
 #include "trace/packet_render.h"
+
+#include "build/camera.h"
+#include "build/parallel.h"
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
 
@@ -109,8 +112,7 @@ typedef struct {
     const lanes_kernels *k;
     float eps;
     lanes_scene_plan plan;
-    vec3 eye, fwd, right, up;
-    float tan_half, aspect;
+    lanes_view view;
     int width, height, side, qx, qy;     /* primary packets: side x side pixels, qx x qy of them */
     uint32_t *quad_order;                /* quadrants in Hilbert order */
     size_t quads;
@@ -299,11 +301,9 @@ static void primary_packet(worker_t *w, uint32_t quad, int sample)
                         sx = ((float)(sample % strata) + lanes_hash01(seed, 1, 0)) / (float)strata;
                         sy = ((float)(sample / strata % strata) + lanes_hash01(seed, 2, 0)) / (float)strata;
                     }
-                    float fx = (2.0f * ((float)x + sx) / (float)job->width - 1.0f) * job->tan_half * job->aspect;
-                    float fy = (1.0f - 2.0f * ((float)y + sy) / (float)job->height) * job->tan_half;
-                    vec3 d = v3_add(job->fwd, v3_add(v3_scale(job->right, fx), v3_scale(job->up, fy)));
-                    set_ray(&w->pk, n, job->eye, d, 0.0f, INFINITY);
-                    rays[n++] = (pending_ray){job->eye, d, v3(1, 1, 1),
+                    vec3 d = lanes_view_dir(&job->view, (float)x + sx, (float)y + sy);
+                    set_ray(&w->pk, n, job->view.eye, d, 0.0f, INFINITY);
+                    rays[n++] = (pending_ray){job->view.eye, d, v3(1, 1, 1),
                                               (uint32_t)y * (uint32_t)job->width + (uint32_t)x, seed};
                 }
     w->pk.count = n;
@@ -483,9 +483,8 @@ static void trace_shadows(worker_t *w)
     sl->n = 0;
 }
 
-static void *worker_main(void *p)
+static void worker_main(worker_t *w)
 {
-    worker_t *w = p;
     const job_t *job = w->job;
     for (int sample = 0; sample < job->opt->base.spp && !w->failed; sample++) {
         for (size_t qi = w->first_quad; qi < w->end_quad; qi++) {
@@ -509,7 +508,12 @@ static void *worker_main(void *p)
         w->queue[1].n = 0;
         trace_shadows(w);
     }
-    return NULL;
+}
+
+static void share_task(void *ctx, size_t share, int worker)
+{
+    (void)worker;
+    worker_main((worker_t *)ctx + share);
 }
 
 static bool worker_init(worker_t *w, job_t *job)
@@ -634,13 +638,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     job.resolved.base.accuracy = job.plan.accuracy;
     job.opt = &job.resolved;
     job.eps = lanes_scene_epsilon(scene);
-    const lanes_camera *c = &scene->camera;
-    job.eye = v3_load(c->eye);
-    job.fwd = v3_normalize(v3_sub(v3_load(c->target), job.eye));
-    job.right = v3_normalize(v3_cross(job.fwd, v3_load(c->up)));
-    job.up = v3_cross(job.right, job.fwd);
-    job.tan_half = tanf(c->fov_y_degrees * LANES_PI / 360.0f);
-    job.aspect = (float)job.width / (float)job.height;
+    job.view = lanes_view_make(&scene->camera, job.width, job.height);
     memcpy(job.root_lo, accel->bvh2.nodes[0].min, sizeof job.root_lo);
     memcpy(job.root_hi, accel->bvh2.nodes[0].max, sizeof job.root_hi);
 
@@ -663,12 +661,9 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     }
     free(order);
 
-    int threads = opt->base.threads > 0 ? opt->base.threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
-    if (threads < 1) threads = 1;
+    int threads = lanes_parallel_threads(opt->base.threads);
     if ((size_t)threads > job.quads) threads = (int)job.quads;
-    if (threads > 64) threads = 64;
     worker_t *workers = ok ? calloc((size_t)threads, sizeof *workers) : NULL;
-    pthread_t tid[64];
     int inited = 0;
     ok = ok && workers;
     for (int i = 0; ok && i < threads; i++) {
@@ -681,15 +676,8 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     if (ok) {
         pthread_mutex_init(&job.progress_lock, NULL);
         double t0 = lanes_render_clock();
-        int started = 1;
-        for (int i = 1; i < threads; i++) {
-            if (pthread_create(&tid[i], NULL, worker_main, &workers[i]) != 0) break;
-            started = i + 1;
-        }
-        /* threads that could not start: their share runs here */
-        for (int i = started; i < threads; i++) worker_main(&workers[i]);
-        worker_main(&workers[0]);
-        for (int i = 1; i < started; i++) pthread_join(tid[i], NULL);
+        /* one item per worker's share (whichever thread runs it) */
+        lanes_parallel_for(threads, (size_t)threads, share_task, workers);
         out->seconds = lanes_render_clock() - t0;
         pthread_mutex_destroy(&job.progress_lock);
     }

@@ -1,7 +1,10 @@
 /* The Whitted renderer (see render.h). One ray at a time through the kernel
  * table of the chosen set; threads take 16x16 tiles from a shared counter. */
-#define _DEFAULT_SOURCE /* sysconf(_SC_NPROCESSORS_ONLN), clock_gettime */
+#define _DEFAULT_SOURCE /* clock_gettime */
 #include "trace/render.h"
+
+#include "build/camera.h"
+#include "build/parallel.h"
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
 
@@ -11,7 +14,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 static const char *const scheme_names[LANES_SCHEME_COUNT] = {"single", "wide"};
 
@@ -72,10 +74,9 @@ typedef struct {
     float eps;          /* offset of secondary origins, scaled to the scene */
     lanes_rcp_mode rcp; /* of the accuracy mode */
     lanes_scene_plan plan;
-    vec3 cam_eye, cam_fwd, cam_right, cam_up;
+    lanes_view view;
     float *rgb;
     int width, height, tiles_x, tiles_y;
-    atomic_int next_tile;
     atomic_int tiles_done;
     pthread_mutex_t progress_lock;
 } render_job;
@@ -164,8 +165,6 @@ static void render_tile(render_job *job, int tile, lanes_shadow_ray *shadow, ray
 {
     const lanes_render_options *opt = job->opt;
     int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
-    float aspect = (float)job->width / (float)job->height;
-    float tan_half = tanf(job->scene->camera.fov_y_degrees * LANES_PI / 360.0f);
     int strata = (int)ceilf(sqrtf((float)opt->spp));
     for (int y = y0; y < y0 + 16 && y < job->height; y++) {
         for (int x = x0; x < x0 + 16 && x < job->width; x++) {
@@ -177,11 +176,9 @@ static void render_tile(render_job *job, int tile, lanes_shadow_ray *shadow, ray
                     sx = ((float)(s % strata) + lanes_hash01(seed, 1, 0)) / (float)strata;
                     sy = ((float)(s / strata % strata) + lanes_hash01(seed, 2, 0)) / (float)strata;
                 }
-                float px = (2.0f * ((float)x + sx) / (float)job->width - 1.0f) * tan_half * aspect;
-                float py = (1.0f - 2.0f * ((float)y + sy) / (float)job->height) * tan_half;
-                vec3 d = v3_add(job->cam_fwd, v3_add(v3_scale(job->cam_right, px), v3_scale(job->cam_up, py)));
+                vec3 d = lanes_view_dir(&job->view, (float)x + sx, (float)y + sy);
                 count->camera++;
-                sum = v3_add(sum, shade(job, job->cam_eye, d, v3(1, 1, 1), 0, seed, shadow, count));
+                sum = v3_add(sum, shade(job, job->view.eye, d, v3(1, 1, 1), 0, seed, shadow, count));
             }
             float *out = job->rgb + ((size_t)y * (size_t)job->width + (size_t)x) * 3;
             out[0] = sum.x / (float)opt->spp;
@@ -191,29 +188,30 @@ static void render_tile(render_job *job, int tile, lanes_shadow_ray *shadow, ray
     }
 }
 
+/* One worker's own state: its counts and room for one diffuse hit's shadow
+ * rays. */
+typedef struct {
+    ray_counts count;
+    lanes_shadow_ray *shadow;
+} worker_state;
+
 typedef struct {
     render_job *job;
-    ray_counts count;
-    lanes_shadow_ray *shadow; /* room for one diffuse hit's shadow rays */
-} worker_arg;
+    worker_state *workers;
+} render_loop;
 
-static void *worker(void *p)
+static void tile_task(void *ctx, size_t tile, int worker)
 {
-    worker_arg *w = p;
-    render_job *job = w->job;
-    int tiles = job->tiles_x * job->tiles_y;
-    for (;;) {
-        int t = atomic_fetch_add(&job->next_tile, 1);
-        if (t >= tiles) break;
-        render_tile(job, t, w->shadow, &w->count);
-        int done = atomic_fetch_add(&job->tiles_done, 1) + 1;
-        if (job->opt->progress) {
-            pthread_mutex_lock(&job->progress_lock);
-            job->opt->progress(job->opt->progress_ctx, (double)done / (double)tiles);
-            pthread_mutex_unlock(&job->progress_lock);
-        }
+    render_loop *loop = ctx;
+    render_job *job = loop->job;
+    worker_state *w = &loop->workers[worker];
+    render_tile(job, (int)tile, w->shadow, &w->count);
+    int done = atomic_fetch_add(&job->tiles_done, 1) + 1;
+    if (job->opt->progress) {
+        pthread_mutex_lock(&job->progress_lock);
+        job->opt->progress(job->opt->progress_ctx, (double)done / (double)(job->tiles_x * job->tiles_y));
+        pthread_mutex_unlock(&job->progress_lock);
     }
-    return NULL;
 }
 
 lanes_status lanes_render_api_accel_create(const lanes_scene *scene, lanes_device device,
@@ -295,11 +293,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
         }
     }
 
-    const lanes_camera *c = &scene->camera;
-    job.cam_eye = v3_load(c->eye);
-    job.cam_fwd = v3_normalize(v3_sub(v3_load(c->target), job.cam_eye));
-    job.cam_right = v3_normalize(v3_cross(job.cam_fwd, v3_load(c->up)));
-    job.cam_up = v3_cross(job.cam_right, job.cam_fwd);
+    job.view = lanes_view_make(&scene->camera, job.width, job.height);
 
     job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
     if (!job.rgb) {
@@ -310,41 +304,36 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
     job.tiles_y = (job.height + 15) / 16;
     pthread_mutex_init(&job.progress_lock, NULL);
 
-    int threads = opt->threads > 0 ? opt->threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
-    if (threads < 1) threads = 1;
-    if (threads > 256) threads = 256;
-    worker_arg args[256];
-    pthread_t tid[256];
-    double t0 = lanes_render_clock();
-    int started = 0;
+    int threads = lanes_parallel_threads(opt->threads);
+    worker_state *workers = calloc((size_t)threads, sizeof *workers);
     size_t shadow_room = (size_t)lanes_max_shadow_rays(scene, opt->area_samples) + 1;
-    for (int i = 0; i < threads; i++) {
-        args[i] = (worker_arg){&job, {0}, calloc(shadow_room, sizeof(lanes_shadow_ray))};
-        if (!args[i].shadow) break;
-        if (i > 0 && pthread_create(&tid[i], NULL, worker, &args[i]) != 0) {
-            free(args[i].shadow);
-            break;
-        }
-        started = i + 1;
+    bool ok = workers != NULL;
+    for (int i = 0; ok && i < threads; i++) {
+        workers[i].shadow = calloc(shadow_room, sizeof(lanes_shadow_ray));
+        ok = workers[i].shadow != NULL;
     }
-    if (started == 0) {
+    if (!ok) {
+        for (int i = 0; workers && i < threads; i++) free(workers[i].shadow);
+        free(workers);
         free(job.rgb);
         pthread_mutex_destroy(&job.progress_lock);
         snprintf(err->message, sizeof err->message, "render: out of memory");
         return false;
     }
-    worker(&args[0]); /* the calling thread works too */
-    for (int i = 1; i < started; i++) pthread_join(tid[i], NULL);
+    double t0 = lanes_render_clock();
+    render_loop loop = {&job, workers};
+    lanes_parallel_for(threads, (size_t)job.tiles_x * (size_t)job.tiles_y, tile_task, &loop);
     out->seconds = lanes_render_clock() - t0;
     pthread_mutex_destroy(&job.progress_lock);
 
-    for (int i = 0; i < started; i++) {
-        free(args[i].shadow);
-        out->camera_rays += args[i].count.camera;
-        out->shadow_rays += args[i].count.shadow;
-        out->secondary_rays += args[i].count.secondary;
-        for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += args[i].count.by_depth[d];
+    for (int i = 0; i < threads; i++) {
+        free(workers[i].shadow);
+        out->camera_rays += workers[i].count.camera;
+        out->shadow_rays += workers[i].count.shadow;
+        out->secondary_rays += workers[i].count.secondary;
+        for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += workers[i].count.by_depth[d];
     }
+    free(workers);
     out->rays = out->camera_rays + out->shadow_rays + out->secondary_rays;
     out->rgb = job.rgb;
     out->width = job.width;

@@ -13,30 +13,8 @@
 #include <string.h>
 
 #include "build/scene.h"
+#include "build/vec3.h"
 #include "trace/kernels.h"
-
-#define LANES_PI 3.14159265358979323846f
-
-typedef struct {
-    float x, y, z;
-} vec3;
-
-static inline vec3 v3(float x, float y, float z) { return (vec3){x, y, z}; }
-static inline vec3 v3_load(const float *p) { return (vec3){p[0], p[1], p[2]}; }
-static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static inline vec3 v3_scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
-static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
-static inline float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static inline vec3 v3_cross(vec3 a, vec3 b)
-{
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-static inline vec3 v3_normalize(vec3 a)
-{
-    float l = sqrtf(v3_dot(a, a));
-    return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
-}
 
 /* Deterministic numbers in [0,1) from a hash, so images do not depend on
  * thread scheduling or on the order rays are traced in. */
@@ -57,7 +35,6 @@ static inline vec3 lanes_background(vec3 d)
     return v3_add(v3_scale(v3(0.05f, 0.05f, 0.06f), 1.0f - t), v3_scale(v3(0.15f, 0.18f, 0.25f), t));
 }
 
-static inline vec3 v3_abs(vec3 a) { return v3(fabsf(a.x), fabsf(a.y), fabsf(a.z)); }
 
 /* The surface a ray hit. */
 typedef struct {
