@@ -94,19 +94,20 @@ static int cmp_half_edge(const void *pa, const void *pb)
 /* The mesh's half-edges sorted by edge, with the closedness counts; and,
  * when adjacent is not NULL, each paired edge's neighbour
  * (LANES_NO_HIT where there is none). */
-static bool analyse_edges(const lanes_mesh *m, acc_closure *c, half_edge **out, uint32_t *adjacent, lanes_error *err)
+static lanes_status analyse_edges(const lanes_mesh *m, acc_closure *c, half_edge **out, uint32_t *adjacent,
+                                  lanes_error *err)
 {
     memset(c, 0, sizeof *c);
     c->triangles = m->triangle_count;
     if (m->triangle_count > UINT32_MAX / 3) {
-        lanes_error_set(err, "mesh too large for the accuracy study (%zu triangles)", m->triangle_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY,
+                               "mesh too large for the accuracy study (%zu triangles)", m->triangle_count);
     }
     size_t n = 0;
     half_edge *he = malloc((3 * m->triangle_count + 1) * sizeof *he);
     if (!he) {
-        lanes_error_set(err, "out of memory for %zu triangles", m->triangle_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for %zu triangles",
+                               m->triangle_count);
     }
     for (size_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *v = m->indices + 3 * t;
@@ -144,10 +145,10 @@ static bool analyse_edges(const lanes_mesh *m, acc_closure *c, half_edge **out, 
     } else {
         free(he);
     }
-    return true;
+    return LANES_OK;
 }
 
-bool acc_mesh_closure(const lanes_mesh *m, acc_closure *c, lanes_error *err)
+lanes_status acc_mesh_closure(const lanes_mesh *m, acc_closure *c, lanes_error *err)
 {
     return analyse_edges(m, c, NULL, NULL, err);
 }
@@ -183,11 +184,12 @@ void acc_closure_describe(const acc_closure *c, char *buf, size_t size)
 }
 
 /* Closes each boundary loop with a fan of triangles that run against it. */
-static bool fill_holes(lanes_mesh *m, size_t *loops_out, size_t *added_out, lanes_error *err)
+static lanes_status fill_holes(lanes_mesh *m, size_t *loops_out, size_t *added_out, lanes_error *err)
 {
+    lanes_status status;
     acc_closure c;
     half_edge *he = NULL;
-    if (!analyse_edges(m, &c, &he, NULL, err)) return false;
+    if ((status = analyse_edges(m, &c, &he, NULL, err)) != LANES_OK) return status;
     /* boundary half-edges as the triangles run them: from -> to */
     size_t nb = 0;
     uint32_t (*bnd)[2] = malloc((c.boundary + 1) * sizeof *bnd);
@@ -204,8 +206,7 @@ static bool fill_holes(lanes_mesh *m, size_t *loops_out, size_t *added_out, lane
     }
     free(he);
     if (!ok) {
-        lanes_error_set(err, "out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
     }
     /* next[i]: the boundary half-edge leaving the end of half-edge i; a
      * vertex with two leaving boundary edges makes the loops ambiguous */
@@ -214,27 +215,26 @@ static bool fill_holes(lanes_mesh *m, size_t *loops_out, size_t *added_out, lane
     uint32_t *loop = malloc((nb + 1) * sizeof *loop);
     uint32_t *idx = NULL;
     size_t loops = 0, added = 0;
-    ok = next && used && loop;
-    for (size_t i = 0; ok && i < nb; i++) {
+    if (!next || !used || !loop) status = lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
+    for (size_t i = 0; status == LANES_OK && i < nb; i++) {
         size_t found = 0, which = 0;
         for (size_t j = 0; j < nb; j++)
             if (bnd[j][0] == bnd[i][1]) found++, which = j;
         if (found != 1) {
-            lanes_error_set(err, "its boundary is not a set of simple loops (vertex %u)", bnd[i][1]);
-            ok = false;
+            status = lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                     "its boundary is not a set of simple loops (vertex %u)", bnd[i][1]);
         }
         next[i] = which;
     }
-    if (ok) {
+    if (status == LANES_OK) {
         idx = realloc(m->indices, (3 * m->triangle_count + 3 * nb) * sizeof *idx);
         if (!idx) {
-            lanes_error_set(err, "out of memory");
-            ok = false;
+            status = lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
         } else {
             m->indices = idx;
         }
     }
-    for (size_t s = 0; ok && s < nb; s++) {
+    for (size_t s = 0; status == LANES_OK && s < nb; s++) {
         if (used[s]) continue;
         size_t k = 0;
         for (size_t i = s; !used[i]; i = next[i]) {
@@ -254,51 +254,55 @@ static bool fill_holes(lanes_mesh *m, size_t *loops_out, size_t *added_out, lane
     free(bnd), free(next), free(used), free(loop);
     if (loops_out) *loops_out = loops;
     if (added_out) *added_out = added;
-    return ok;
+    return status;
 }
 
-bool acc_mesh_load(const char *spec, bool is_file, lanes_mesh *out, char *note, size_t note_size,
-                   lanes_error *err)
+lanes_status acc_mesh_load(const char *spec, bool is_file, lanes_mesh *out, char *note, size_t note_size,
+                           lanes_error *err)
 {
+    lanes_status status;
     memset(out, 0, sizeof *out);
     if (note && note_size) note[0] = '\0';
     if (is_file) {
-        if (!lanes_mesh_read(spec, out, err)) return false;
+        if ((status = lanes_mesh_read(spec, out, err)) != LANES_OK) return status;
     } else {
         /* level 4: 5120 triangles, enough edges to count leaks on */
-        if (!lanes_builtin_object(spec, strcmp(spec, "sphere") == 0 ? 4 : -1, out, err)) return false;
+        if ((status = lanes_builtin_object(spec, strcmp(spec, "sphere") == 0 ? 4 : -1, out, err)) != LANES_OK)
+            return status;
     }
     acc_closure c;
     char what[256];
-    if (!acc_mesh_closure(out, &c, err)) goto fail;
-    if (acc_closure_closed(&c)) return true;
+    if ((status = acc_mesh_closure(out, &c, err)) != LANES_OK) goto fail;
+    if (acc_closure_closed(&c)) return LANES_OK;
     acc_closure_describe(&c, what, sizeof what);
     if (!is_file && c.triangles > 0 && c.nonmanifold == 0 && c.misoriented == 0 && c.degenerate == 0 &&
         c.boundary * 100 < c.edges) {
         size_t loops = 0, added = 0;
         lanes_error sub;
-        if (!fill_holes(out, &loops, &added, &sub)) {
-            lanes_error_set(err, "%s: not a closed mesh (%s), and the holes cannot be filled: %s", spec, what,
-                            sub.message);
+        if ((status = fill_holes(out, &loops, &added, &sub)) != LANES_OK) {
+            status = lanes_error_set(err, status,
+                                     "%s: not a closed mesh (%s), and the holes cannot be filled: %s", spec,
+                                     what, sub.message);
             goto fail;
         }
         acc_closure after;
-        if (!acc_mesh_closure(out, &after, err)) goto fail;
+        if ((status = acc_mesh_closure(out, &after, err)) != LANES_OK) goto fail;
         if (acc_closure_closed(&after)) {
             if (note && note_size)
                 snprintf(note, note_size, "%s: %s, closed by filling %zu hole%s with %zu triangle%s", spec, what, loops,
                          loops == 1 ? "" : "s", added, added == 1 ? "" : "s");
-            return true;
+            return LANES_OK;
         }
     }
-    lanes_error_set(err,
-                    "%s: not a closed mesh: %s (lanes accuracy counts rays escaping from inside, so every edge "
-                    "must be shared by exactly two triangles that run it in opposite directions)",
-                    spec, what);
+    status = lanes_error_set(
+        err, LANES_ERR_BAD_INPUT,
+        "%s: not a closed mesh: %s (lanes accuracy counts rays escaping from inside, so every edge "
+        "must be shared by exactly two triangles that run it in opposite directions)",
+        spec, what);
 fail:
     lanes_mesh_free(out);
     memset(out, 0, sizeof *out);
-    return false;
+    return status;
 }
 
 /* ---- worlds ---------------------------------------------------------- */
@@ -374,7 +378,7 @@ static void point_block(void *p, size_t block, int worker)
     }
 }
 
-static bool find_points(acc_world *w, int threads, lanes_error *err)
+static lanes_status find_points(acc_world *w, int threads, lanes_error *err)
 {
     point_ctx c = {.w = w};
     lanes_scene_bounds(&w->scene, c.lo, c.hi);
@@ -383,8 +387,7 @@ static bool find_points(acc_world *w, int threads, lanes_error *err)
     w->points = malloc(ACC_POINTS * sizeof *w->points);
     if (!c.cand || !c.inside || !w->points) {
         free(c.cand), free(c.inside);
-        lanes_error_set(err, "out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
     }
     /* A mesh whose interior fills a few percent of its box needs a few
      * rounds; one whose rounding left no interior gives up after 16. */
@@ -396,12 +399,14 @@ static bool find_points(acc_world *w, int threads, lanes_error *err)
         w->point_candidates += POINT_ROUND;
     }
     free(c.cand), free(c.inside);
-    return true;
+    return LANES_OK;
 }
 
-bool acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, double size, double translation,
-                     unsigned width_mask, int threads, uint64_t seed, lanes_error *err)
+lanes_status acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, double size,
+                             double translation, unsigned width_mask, int threads, uint64_t seed,
+                             lanes_error *err)
 {
+    lanes_status status = LANES_OK;
     memset(w, 0, sizeof *w);
     lanes_scene_init(&w->scene);
     snprintf(w->name, sizeof w->name, "%s", name);
@@ -420,16 +425,16 @@ bool acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, dou
     double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                        (hi[2] - lo[2]) * (hi[2] - lo[2]));
     if (!(diag > 0.0) || !isfinite(diag) || !(size > 0.0) || !isfinite(translation)) {
-        lanes_error_set(err, "%s: cannot place the mesh (bounding-box diagonal %g, size %g, translation %g)", name,
-                        diag, size, translation);
-        return false;
+        return lanes_error_set(
+            err, LANES_ERR_BAD_INPUT,
+            "%s: cannot place the mesh (bounding-box diagonal %g, size %g, translation %g)", name, diag, size,
+            translation);
     }
     /* Scaled and translated in double, rounded once to float: what a user's
      * scene far from the origin holds. */
     float *pos = malloc((mesh->vertex_count + 1) * 3 * sizeof *pos);
     if (!pos) {
-        lanes_error_set(err, "out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
     }
     double scale = size / diag;
     for (size_t v = 0; v < mesh->vertex_count; v++)
@@ -443,37 +448,39 @@ bool acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, dou
     mat.kind = LANES_MAT_DIFFUSE;
     mat.color[0] = mat.color[1] = mat.color[2] = 0.7f;
     uint32_t mi = 0;
-    bool ok = lanes_scene_add_material(&w->scene, &mat, &mi, err) &&
-              lanes_scene_add_mesh(&w->scene, &placed, NULL, mi, name, err);
+    bool ok = lanes_scene_add_material(&w->scene, &mat, &mi, err) == LANES_OK &&
+              lanes_scene_add_mesh(&w->scene, &placed, NULL, mi, name, err) == LANES_OK;
     free(pos);
     if (!ok) goto fail;
     if (w->scene.triangle_count != mesh->triangle_count) {
-        lanes_error_set(err, "%s: %zu of %zu triangles placed", name, w->scene.triangle_count, mesh->triangle_count);
+        status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: %zu of %zu triangles placed", name,
+                                 w->scene.triangle_count, mesh->triangle_count);
         goto fail;
     }
     w->eps = lanes_scene_epsilon(&w->scene);
 
     lanes_render_accel accel;
-    if (!lanes_render_accel_build(&w->scene, 0, threads, &accel, err)) goto fail;
+    if ((status = lanes_render_accel_build(&w->scene, 0, threads, &accel, err)) != LANES_OK) goto fail;
     w->bvh2 = accel.bvh2;
     static const int widths[3] = {4, 8, 16};
     for (int i = 0; i < 3; i++)
-        if ((width_mask & acc_width_bit(widths[i])) && !lanes_wbvh_from_bvh2(&w->bvh2, widths[i], &w->wide[i], err))
+        if ((width_mask & acc_width_bit(widths[i])) &&
+            (status = lanes_wbvh_from_bvh2(&w->bvh2, widths[i], &w->wide[i], err)) != LANES_OK)
             goto fail;
-    if (!acc_ref_init(&w->ref, &w->bvh2, &w->scene, err)) goto fail;
+    if ((status = acc_ref_init(&w->ref, &w->bvh2, &w->scene, err)) != LANES_OK) goto fail;
 
     acc_closure c;
     w->adjacent = malloc((3 * mesh->triangle_count + 1) * sizeof *w->adjacent);
     if (!w->adjacent) {
-        lanes_error_set(err, "out of memory");
+        status = lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
         goto fail;
     }
-    if (!analyse_edges(mesh, &c, NULL, w->adjacent, err)) goto fail;
-    if (!find_points(w, threads, err)) goto fail;
-    return true;
+    if ((status = analyse_edges(mesh, &c, NULL, w->adjacent, err)) != LANES_OK) goto fail;
+    if ((status = find_points(w, threads, err)) != LANES_OK) goto fail;
+    return LANES_OK;
 fail:
     acc_world_free(w);
-    return false;
+    return status;
 }
 
 void acc_world_free(acc_world *w)
@@ -590,7 +597,7 @@ static void miss_block(void *p, size_t block, int worker)
         c->keep[j] = miss_candidate(c->w, c->base + j, &c->cand[j]);
 }
 
-bool acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err)
+lanes_status acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err)
 {
     free(w->misses);
     w->misses = malloc((count + 1) * sizeof *w->misses);
@@ -598,8 +605,7 @@ bool acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err)
     w->miss_count = w->miss_attempts = 0;
     if (!w->misses || !c.cand || !c.keep) {
         free(c.cand), free(c.keep);
-        lanes_error_set(err, "out of memory for %zu rays", count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for %zu rays", count);
     }
     /* Most candidates on a convex mesh are kept; on a concave one the ray
      * often meets another part. 32 tries per ray is plenty for both. */
@@ -612,7 +618,7 @@ bool acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err)
         w->miss_attempts += MISS_ROUND;
     }
     free(c.cand), free(c.keep);
-    return true;
+    return LANES_OK;
 }
 
 /* ---- measuring ------------------------------------------------------- */
@@ -805,19 +811,19 @@ static void merge(acc_counts *into, const acc_counts *c)
     into->miss_rays += c->miss_rays, into->false_hits += c->false_hits;
 }
 
-bool acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_error *err)
+lanes_status acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_error *err)
 {
     measure_ctx c = {.w = w, .job = job, .prec = lanes_accuracy_precision(job->mode)};
     bool needs_wide =
         job->via == ACC_VIA_WIDE || (job->via == ACC_VIA_PACKET && !job->aimed && job->self_from > job->first);
     c.wide = acc_world_wide(w, job->k->wide_width);
     if (needs_wide && !c.wide) {
-        lanes_error_set(err, "%s: no wide BVH of width %d was built", w->name, job->k->wide_width);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: no wide BVH of width %d was built", w->name,
+                               job->k->wide_width);
     }
     if (job->count > 0 && w->point_count == 0) {
-        lanes_error_set(err, "%s at %g: no interior points", w->name, w->translation);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s at %g: no interior points", w->name,
+                               w->translation);
     }
     int threads = lanes_parallel_threads(job->threads);
     bool ok = true;
@@ -843,8 +849,7 @@ bool acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_
         lanes_rays_free(&c.ws[t]->soa);
         free(c.ws[t]);
     }
-    if (!ok) lanes_error_set(err, "out of memory");
-    return ok;
+    return ok ? LANES_OK : lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory");
 }
 
 static int cmp_double(const void *a, const void *b)

@@ -61,7 +61,7 @@ typedef struct acc_closure {
     size_t degenerate;   /* triangles that repeat a vertex index */
 } acc_closure;
 
-bool acc_mesh_closure(const lanes_mesh *m, acc_closure *c, lanes_error *err);
+lanes_status acc_mesh_closure(const lanes_mesh *m, acc_closure *c, lanes_error *err);
 bool acc_closure_closed(const acc_closure *c);
 /* "12 boundary edges, 1 misoriented edge" */
 void acc_closure_describe(const acc_closure *c, char *buf, size_t size);
@@ -72,8 +72,8 @@ void acc_closure_describe(const acc_closure *c, char *buf, size_t size);
  * CGAL dragon has two triangular holes) is closed by filling each loop with
  * a fan, and *note says so; anything else that is not closed is an error
  * naming the spec and what is wrong. note may be NULL. */
-bool acc_mesh_load(const char *spec, bool is_file, lanes_mesh *out, char *note, size_t note_size,
-                   lanes_error *err);
+lanes_status acc_mesh_load(const char *spec, bool is_file, lanes_mesh *out, char *note, size_t note_size,
+                           lanes_error *err);
 
 /* ---- worlds ---------------------------------------------------------- */
 
@@ -99,12 +99,12 @@ typedef struct acc_world {
  * the wide BVHs of the widths whose acc_width_bit is in width_mask, the
  * reference and the interior points.
  * threads: 0 for all cores. */
-bool acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, double size,
-                     double translation, unsigned width_mask, int threads, uint64_t seed,
-                     lanes_error *err);
+lanes_status acc_world_build(acc_world *w, const char *name, const lanes_mesh *mesh, double size,
+                             double translation, unsigned width_mask, int threads, uint64_t seed,
+                             lanes_error *err);
 /* Generates `count` rays that just miss (b); fewer when the mesh offers too
  * few silhouette edges that the exact test confirms as misses. */
-bool acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err);
+lanes_status acc_world_misses(acc_world *w, size_t count, int threads, lanes_error *err);
 void acc_world_free(acc_world *w);
 const lanes_wbvh *acc_world_wide(const acc_world *w, int width);
 static inline unsigned acc_width_bit(int width) { return width == 4 ? 1u : width == 8 ? 2u : width == 16 ? 4u : 0u; }
@@ -149,7 +149,7 @@ typedef struct acc_job {
 
 /* Adds the job's counts to *out. Fails only when memory runs out or the
  * world lacks the wide BVH the set needs. */
-bool acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_error *err);
+lanes_status acc_measure(const acc_world *w, const acc_job *job, acc_counts *out, lanes_error *err);
 
 /* Closest-hit throughput of leak rays 0 .. rays-1 through k->trace_wide on
  * one thread (the caller's), median of reps runs, in Mrays/s; NaN when the

@@ -368,14 +368,13 @@ bool acc_ref_near(const acc_ref *r, const double p[3], double dist)
 
 /* ---- set-up ---------------------------------------------------------- */
 
-bool acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, lanes_error *err)
+lanes_status acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, lanes_error *err)
 {
     r->bvh = bvh;
     r->verts = scene->verts;
     if (bvh->skipped != 0 || bvh->prim_count != scene->triangle_count) {
-        lanes_error_set(err, "reference: the BVH holds %zu of %zu triangles", bvh->prim_count,
-                        scene->triangle_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "reference: the BVH holds %zu of %zu triangles",
+                               bvh->prim_count, scene->triangle_count);
     }
     /* Each leaf's triangles must lie inside the intersection of the boxes
      * of all its ancestors: then no widened-box walk can miss them. */
@@ -387,8 +386,7 @@ bool acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, l
     int sp = 0;
     size_t seen = 0;
     if (bvh->node_count == 0) {
-        lanes_error_set(err, "reference: empty BVH");
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "reference: empty BVH");
     }
     stack[sp++] = (item){0, {-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
     while (sp > 0) {
@@ -400,8 +398,8 @@ bool acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, l
         }
         if (nd->count == 0) {
             if ((size_t)nd->first + 1 >= bvh->node_count || sp + 2 > (int)(sizeof stack / sizeof stack[0])) {
-                lanes_error_set(err, "reference: malformed BVH at node %u", it.node);
-                return false;
+                return lanes_error_set(err, LANES_ERR_BAD_INPUT, "reference: malformed BVH at node %u",
+                                       it.node);
             }
             stack[sp++] = (item){nd->first, {it.lo[0], it.lo[1], it.lo[2]}, {it.hi[0], it.hi[1], it.hi[2]}};
             stack[sp++] = (item){nd->first + 1, {it.lo[0], it.lo[1], it.lo[2]}, {it.hi[0], it.hi[1], it.hi[2]}};
@@ -412,16 +410,16 @@ bool acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, l
             const float *v = scene->verts + (size_t)prim * 9;
             for (int c = 0; c < 9; c++)
                 if (!(v[c] >= it.lo[c % 3] && v[c] <= it.hi[c % 3])) {
-                    lanes_error_set(err, "reference: triangle %u lies outside a box above its leaf", prim);
-                    return false;
+                    return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                           "reference: triangle %u lies outside a box above its leaf", prim);
                 }
             seen++;
         }
     }
     if (seen != scene->triangle_count) {
-        lanes_error_set(err, "reference: the BVH's leaves hold %zu triangle references for %zu triangles", seen,
-                        scene->triangle_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "reference: the BVH's leaves hold %zu triangle references for %zu triangles",
+                               seen, scene->triangle_count);
     }
-    return true;
+    return LANES_OK;
 }

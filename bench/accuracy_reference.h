@@ -47,7 +47,7 @@ typedef struct acc_ref {
 } acc_ref;
 
 /* Fails (with a message) when some triangle lies outside a box above it. */
-bool acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, lanes_error *err);
+lanes_status acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, lanes_error *err);
 
 /* Does the ray o + t d, t >= 0, meet any triangle? */
 bool acc_ref_any(const acc_ref *r, const float o[3], const float d[3]);

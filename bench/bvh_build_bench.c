@@ -237,7 +237,7 @@ int main(int argc, char **argv)
                     lanes_bvh2 bvh;
                     lanes_error err;
                     double t0 = now();
-                    if (!lanes_bvh2_build(&sc, &o, &bvh, &err)) {
+                    if (lanes_bvh2_build(&sc, &o, &bvh, &err) != LANES_OK) {
                         fprintf(stderr, "%s\n", err.message);
                         return 1;
                     }
@@ -246,7 +246,7 @@ int main(int argc, char **argv)
                     for (int w = 0; w < 3; w++) {
                         lanes_wbvh wb;
                         double a = now();
-                        if (!lanes_wbvh_from_bvh2(&bvh, 4 << w, &wb, &err)) {
+                        if (lanes_wbvh_from_bvh2(&bvh, 4 << w, &wb, &err) != LANES_OK) {
                             fprintf(stderr, "%s\n", err.message);
                             return 1;
                         }

@@ -571,7 +571,8 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
     char names[MAX_MESHES][64], notes[MAX_MESHES][320];
     for (int m = 0; m < plan.nmeshes; m++) {
         lanes_error err;
-        if (!acc_mesh_load(plan.meshes[m], plan.mesh_is_file[m], &meshes[m], notes[m], sizeof notes[m], &err))
+        if (acc_mesh_load(plan.meshes[m], plan.mesh_is_file[m], &meshes[m], notes[m], sizeof notes[m],
+                          &err) != LANES_OK)
             cli_fail("accuracy: %s", err.message);
         plain_name(names[m], sizeof names[m], plan.meshes[m]);
     }
@@ -595,9 +596,9 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
         for (int t = 0; t < plan.ntranslations; t++) {
             acc_world w;
             lanes_error err;
-            if (!acc_world_build(&w, names[m], &meshes[m], plan.size, plan.translations[t], widths, plan.threads,
-                                 plan.seed, &err) ||
-                !acc_world_misses(&w, plan.miss_rays, plan.threads, &err))
+            if (acc_world_build(&w, names[m], &meshes[m], plan.size, plan.translations[t], widths,
+                                plan.threads, plan.seed, &err) != LANES_OK ||
+                acc_world_misses(&w, plan.miss_rays, plan.threads, &err) != LANES_OK)
                 cli_fail("accuracy: %s", err.message);
             for (int i = 0; i < LANES_ISA_COUNT; i++) {
                 if (!plan.isas[i]) continue;
@@ -619,14 +620,15 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
                                    .self_from = r->no_interior ? 0 : plan.self_from,
                                    .false_hits = true,
                                    .threads = plan.threads};
-                    if (!acc_measure(&w, &job, &r->c, &err)) cli_fail("accuracy: %s", err.message);
+                    if (acc_measure(&w, &job, &r->c, &err) != LANES_OK) cli_fail("accuracy: %s", err.message);
                     acc_job aimed = {.k = k,
                                      .mode = (lanes_accuracy)mode,
                                      .via = ACC_VIA_WIDE,
                                      .count = r->no_interior ? 0 : plan.aimed_rays,
                                      .aimed = true,
                                      .threads = plan.threads};
-                    if (!acc_measure(&w, &aimed, &r->c, &err)) cli_fail("accuracy: %s", err.message);
+                    if (acc_measure(&w, &aimed, &r->c, &err) != LANES_OK)
+                        cli_fail("accuracy: %s", err.message);
                     if (!r->no_interior)
                         r->mrays = acc_time_wide(&w, k, (lanes_accuracy)mode, plan.time_rays, plan.reps);
                     char what[160];

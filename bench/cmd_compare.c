@@ -24,8 +24,9 @@
 
 #include "bench/cli_common.h"
 #include "bench/embree_adapter.h"
+#include "bench/hits_classify.h"
+#include "bench/ray_sets.h"
 #include "build/bvh.h"
-#include "build/camera.h"
 #include "build/parallel.h"
 #include "build/scene.h"
 #include "build/scene_load.h"
@@ -195,146 +196,6 @@ static void embree_work(void *ctx, size_t b, size_t e)
     lanes_embree_batch_trace(j->e, j->batch, b, e, j->coherent);
 }
 
-/* ---- rays --------------------------------------------------------------- */
-
-static uint64_t splitmix(uint64_t *s)
-{
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-static float rnd01(uint64_t *s) { return (float)(splitmix(s) >> 40) * 0x1p-24f; }
-
-static lanes_ray make_ray(vec3 o, vec3 d, float tnear, float tfar)
-{
-    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
-    lanes_ray_prepare(&r);
-    return r;
-}
-
-/* Bits 0, 2, 4 of m (the x of a Morton index within an 8x8 tile). */
-static int morton_x(int m) { return (m & 1) | ((m >> 1) & 2) | ((m >> 2) & 4); }
-
-/* Camera rays through pixel centres, in 8x8 tiles, Morton order inside a
- * tile: packets of 4, 16 and 64 consecutive rays are 2x2, 4x4 and 8x8
- * pixel blocks, the order a packet tracer would use. */
-static lanes_ray *camera_rays(const lanes_scene *s, int w, int h, size_t *count)
-{
-    lanes_view view = lanes_view_make(&s->camera, w, h);
-    lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
-    if (!rays) return NULL;
-    size_t n = 0;
-    for (int ty = 0; ty < h; ty += 8)
-        for (int tx = 0; tx < w; tx += 8)
-            for (int m = 0; m < 64; m++) {
-                int x = tx + morton_x(m), y = ty + morton_x(m >> 1);
-                if (x >= w || y >= h) continue;
-                vec3 d = v3_normalize(lanes_view_dir(&view, (float)x + 0.5f, (float)y + 0.5f));
-                rays[n++] = make_ray(view.eye, d, 0.0f, INFINITY);
-            }
-    *count = n;
-    return rays;
-}
-
-/* A primary hit as the secondary rays start from it: the point by its
- * barycentrics (more accurate than o + t d), the normal facing the ray,
- * the origin offset along it by a scene-relative epsilon. */
-typedef struct {
-    vec3 origin, n;
-    uint32_t pixel;
-} surface_point;
-
-static surface_point *surface_points(const lanes_scene *s, const lanes_ray *rays,
-                                     const lanes_hit *hits, size_t n, size_t *count)
-{
-    float lo[3], hi[3];
-    lanes_scene_bounds(s, lo, hi);
-    vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
-    float eps = 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
-    surface_point *pts = malloc((n ? n : 1) * sizeof *pts);
-    if (!pts) return NULL;
-    size_t m = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (hits[i].prim == LANES_NO_HIT) continue;
-        const float *v = s->verts + (size_t)hits[i].prim * 9;
-        vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
-        vec3 p = v3_add(v0, v3_add(v3_scale(e1, hits[i].u), v3_scale(e2, hits[i].v)));
-        vec3 nrm = v3_normalize(v3_cross(e1, e2));
-        if (v3_dot(nrm, v3_load(rays[i].d)) > 0.0f) nrm = v3_scale(nrm, -1.0f);
-        pts[m++] = (surface_point){v3_add(p, v3_scale(nrm, eps)), nrm, (uint32_t)i};
-    }
-    *count = m;
-    return pts;
-}
-
-/* Towards the first point light, or a point above the scene (along the
- * camera's up) when there is none; only where the light is in front of the
- * surface, as a renderer would cast them. */
-static lanes_ray *shadow_rays(const lanes_scene *s, const surface_point *pts, size_t n,
-                              size_t *count)
-{
-    vec3 light;
-    if (s->point_light_count > 0) {
-        light = v3_load(s->point_lights[0].position);
-    } else {
-        float lo[3], hi[3];
-        lanes_scene_bounds(s, lo, hi);
-        vec3 centre = v3_scale(v3_add(v3_load(lo), v3_load(hi)), 0.5f);
-        vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
-        light = v3_add(centre, v3_scale(v3_normalize(v3_load(s->camera.up)), sqrtf(v3_dot(diag, diag))));
-    }
-    lanes_ray *rays = malloc((n ? n : 1) * sizeof *rays);
-    if (!rays) return NULL;
-    size_t m = 0;
-    for (size_t i = 0; i < n; i++) {
-        vec3 to = v3_sub(light, pts[i].origin);
-        float dist = sqrtf(v3_dot(to, to));
-        if (!(dist > 0.0f)) continue;
-        vec3 l = v3_scale(to, 1.0f / dist);
-        if (v3_dot(l, pts[i].n) <= 0.0f) continue;
-        rays[m++] = make_ray(pts[i].origin, l, 0.0f, dist * (1.0f - 1e-4f));
-    }
-    *count = m;
-    return rays;
-}
-
-/* Cosine-weighted about the facing normal; the numbers depend only on the
- * pixel, so the rays are the same whatever else changes. */
-static lanes_ray *diffuse_rays(const surface_point *pts, size_t n)
-{
-    lanes_ray *rays = malloc((n ? n : 1) * sizeof *rays);
-    if (!rays) return NULL;
-    for (size_t i = 0; i < n; i++) {
-        uint64_t seed = 0x5eed0000ull + pts[i].pixel;
-        float r1 = rnd01(&seed), r2 = rnd01(&seed);
-        vec3 nz = pts[i].n;
-        vec3 a = fabsf(nz.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
-        vec3 nx = v3_normalize(v3_cross(a, nz)), ny = v3_cross(nz, nx);
-        float phi = 6.28318530717958647692f * r1, r = sqrtf(r2);
-        float lx = r * cosf(phi), ly = r * sinf(phi), lz = sqrtf(fmaxf(0.0f, 1.0f - r2));
-        vec3 d = v3_normalize(v3_add(v3_add(v3_scale(nx, lx), v3_scale(ny, ly)), v3_scale(nz, lz)));
-        rays[i] = make_ray(pts[i].origin, d, 0.0f, INFINITY);
-    }
-    return rays;
-}
-
-static lanes_ray *shuffled(const lanes_ray *rays, size_t n)
-{
-    lanes_ray *out = malloc((n ? n : 1) * sizeof *out);
-    if (!out) return NULL;
-    memcpy(out, rays, n * sizeof *out);
-    uint64_t seed = 0xd1ce;
-    for (size_t i = n; i > 1; i--) {
-        size_t j = (size_t)(splitmix(&seed) % i);
-        lanes_ray t = out[i - 1];
-        out[i - 1] = out[j];
-        out[j] = t;
-    }
-    return out;
-}
-
 /* ---- results ------------------------------------------------------------ */
 
 typedef struct {
@@ -351,10 +212,7 @@ typedef struct {
     lanes_isa isa;
     ray_kind kind;
     size_t rays, agree;
-    /* why the others differ: two triangles at the same t (ties), a hit
-     * within 1e-4 of a triangle's edge or of the ray's ends (grazing), or
-     * neither */
-    size_t ties, grazing, other;
+    hits_differences differ; /* why the others differ */
 } agreement;
 
 typedef struct {
@@ -376,77 +234,6 @@ static row *add_row(results *r)
     row *w = &r->rows[r->count++];
     memset(w, 0, sizeof *w);
     return w;
-}
-
-/* Same primitive and t within 1e-4 relative, or both miss. */
-static bool same_hit(const lanes_hit *a, const lanes_hit *b)
-{
-    if (a->prim != b->prim) return false;
-    if (a->prim == LANES_NO_HIT) return true;
-    return fabsf(a->t - b->t) <= 1e-4f * fmaxf(fabsf(a->t), fabsf(b->t));
-}
-
-/* Barycentric distance from the triangle's boundary of the point where the
- * ray meets its plane, in double (0 on an edge; +inf when parallel), and
- * the rounding error a float test makes in it: the vertices relative to the
- * origin carry an error of about u * (largest coordinate), which dividing
- * by the determinant (|d| * 2 area * cos) magnifies. A small triangle far
- * from the origin, seen at a grazing angle, has barycentrics that float
- * arithmetic cannot resolve to 1e-4. */
-static double edge_distance(const lanes_scene *s, uint32_t prim, const lanes_ray *r, double *err)
-{
-    const float *v = s->verts + (size_t)prim * 9;
-    double e1[3], e2[3], tv[3], p[3], q[3], big = 0.0;
-    for (int a = 0; a < 3; a++) {
-        e1[a] = (double)v[3 + a] - v[a];
-        e2[a] = (double)v[6 + a] - v[a];
-        tv[a] = (double)r->o[a] - v[a];
-        big = fmax(big, fmax(fabs((double)r->o[a]), fmax(fabs((double)v[a]),
-                                                          fmax(fabs((double)v[3 + a]), fabs((double)v[6 + a])))));
-    }
-    p[0] = r->d[1] * e2[2] - (double)r->d[2] * e2[1];
-    p[1] = r->d[2] * e2[0] - (double)r->d[0] * e2[2];
-    p[2] = r->d[0] * e2[1] - (double)r->d[1] * e2[0];
-    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
-    *err = INFINITY;
-    if (det == 0.0) return INFINITY;
-    q[0] = tv[1] * e1[2] - tv[2] * e1[1];
-    q[1] = tv[2] * e1[0] - tv[0] * e1[2];
-    q[2] = tv[0] * e1[1] - tv[1] * e1[0];
-    double b1 = (tv[0] * p[0] + tv[1] * p[1] + tv[2] * p[2]) / det;
-    double b2 = (r->d[0] * q[0] + r->d[1] * q[1] + r->d[2] * q[2]) / det;
-    double le = sqrt(fmax(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2],
-                          e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]));
-    double ld = sqrt((double)r->d[0] * r->d[0] + (double)r->d[1] * r->d[1] + (double)r->d[2] * r->d[2]);
-    *err = 8.0 * 0x1p-24 * big * le * ld / fabs(det);
-    return fmin(fabs(1.0 - b1 - b2), fmin(fabs(b1), fabs(b2)));
-}
-
-/* A hit that float rounding may decide: within 1e-4 of a triangle edge (or
- * within the test's own rounding error of it), or at the very start or end
- * of the ray's interval (a ray starting on a surface). */
-static bool grazing_hit(const lanes_scene *s, const lanes_hit *h, const lanes_ray *r)
-{
-    if (h->prim == LANES_NO_HIT) return false;
-    float scale = fmaxf(fabsf(h->t), 1.0f);
-    if (fabsf(h->t - r->tnear) <= 1e-4f * scale || fabsf(h->t - r->tfar) <= 1e-4f * fabsf(r->tfar))
-        return true;
-    double err, dist = edge_distance(s, h->prim, r, &err);
-    return dist < 1e-4 || dist < err;
-}
-
-/* Sorts a disagreement between lanes' and Embree's closest hits (for
- * shadow rays: the nearest blockers each engine finds) into a category. */
-static void classify(const lanes_scene *s, const lanes_ray *r, const lanes_hit *l,
-                     const lanes_hit *e, agreement *a)
-{
-    if (l->prim != LANES_NO_HIT && e->prim != LANES_NO_HIT && l->prim != e->prim &&
-        fabsf(l->t - e->t) <= 1e-4f * fmaxf(fabsf(l->t), fabsf(e->t)))
-        a->ties++;
-    else if (grazing_hit(s, l, r) || grazing_hit(s, e, r))
-        a->grazing++;
-    else
-        a->other++;
 }
 
 /* ---- the command -------------------------------------------------------- */
@@ -572,7 +359,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
         if (!lanes_embree_supports(c->embree, (lanes_embree_method)m)) continue;
         lanes_error err;
-        if (!lanes_embree_batch_init(&batches[m], (lanes_embree_method)m, occl, rays, n, &err))
+        if (lanes_embree_batch_init(&batches[m], (lanes_embree_method)m, occl, rays, n, &err) != LANES_OK)
             cli_fail("compare: %s", err.message);
         have_batch[m] = true;
         for (int coherent = 0; coherent < 2; coherent++) {
@@ -632,21 +419,22 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
         a->isa = cfg[i].lj.k->isa;
         a->kind = kind;
         a->rays = n;
-        a->agree = a->ties = a->grazing = a->other = 0;
+        a->agree = 0;
+        memset(&a->differ, 0, sizeof a->differ);
         for (size_t r = 0; r < n; r++) {
             bool ok = occl ? (cfg[i].lj.occluded[r] != 0) == (ref_occ[r] != 0)
-                           : same_hit(&cfg[i].lj.hits[r], &ref_hits[r]);
+                           : hits_same(&cfg[i].lj.hits[r], &ref_hits[r]);
             if (ok) {
                 a->agree++;
             } else if (!occl) {
-                classify(&c->scene, &rays[r], &cfg[i].lj.hits[r], &ref_hits[r], a);
+                hits_classify(&c->scene, &rays[r], &cfg[i].lj.hits[r], &ref_hits[r], &a->differ);
             } else {
                 /* the blockers behind the two answers, one ray each */
                 lanes_hit lh, eh;
                 cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, cfg[i].lj.accuracy, &cfg[i].lj.rays[r], 1,
                                         &lh, NULL);
                 lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
-                classify(&c->scene, &rays[r], &lh, &eh, a);
+                hits_classify(&c->scene, &rays[r], &lh, &eh, &a->differ);
             }
         }
     }
@@ -726,8 +514,8 @@ static void print_json(const compare *c, double embree_build)
         printf("    {\"isa\": \"%s\", \"rays\": \"%s\", \"fraction\": %.6f, \"count\": %zu, "
                "\"agree\": %zu, \"ties\": %zu, \"grazing\": %zu, \"other\": %zu}%s\n",
                lanes_isa_name(a->isa), kind_names[a->kind],
-               a->rays ? (double)a->agree / (double)a->rays : 1.0, a->rays, a->agree, a->ties,
-               a->grazing, a->other, i + 1 < c->res.agree_count ? "," : "");
+               a->rays ? (double)a->agree / (double)a->rays : 1.0, a->rays, a->agree, a->differ.ties,
+               a->differ.grazing, a->differ.other, i + 1 < c->res.agree_count ? "," : "");
     }
     printf("  ]\n}\n");
 }
@@ -835,7 +623,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
 
     lanes_error err;
     memset(&err, 0, sizeof err);
-    if (!lanes_scene_load(o->scene_spec, &c->scene, &err)) cli_fail("%s", err.message);
+    if (lanes_scene_load(o->scene_spec, &c->scene, &err) != LANES_OK) cli_fail("%s", err.message);
     if (c->scene.triangle_count == 0) cli_fail("compare: scene '%s' has no triangles", o->scene_spec);
 
     /* The lanes sets to measure: every supported one, unless the user chose
@@ -847,11 +635,15 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         o->isa = lanes_isa_current();
     }
     lanes_isa cap = env_cap && *env_cap ? lanes_isa_from_name(env_cap) : LANES_ISA_NONE;
-    for (int i = 0; i < LANES_ISA_COUNT; i++) {
-        lanes_isa isa = (lanes_isa)i;
-        bool want = o->isa_given ? isa == o->isa
-                                 : lanes_isa_supported(isa) && (cap == LANES_ISA_NONE || isa <= cap);
+    /* In rising preference, as the study lists them; the cap is a place in
+     * that order (lanes_isa_ranked), not in the enum's. */
+    const lanes_isa *ranked = lanes_isa_ranked();
+    bool below_cap = true; /* from the worst set up to the cap */
+    for (int i = LANES_ISA_COUNT - 1; i >= 0; i--) {
+        lanes_isa isa = ranked[i];
+        bool want = o->isa_given ? isa == o->isa : lanes_isa_supported(isa) && below_cap;
         if (want) c->isas[c->isa_count++] = isa;
+        if (isa == cap) below_cap = false;
     }
     if (c->isa_count == 0) cli_fail("compare: no instruction set to measure");
     c->ref_isa = c->isas[c->isa_count - 1];
@@ -884,14 +676,14 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
     bo.threads = o->threads;
-    if (!lanes_bvh2_build(&c->scene, &bo, &c->bvh2, &err)) cli_fail("compare: %s", err.message);
+    if (lanes_bvh2_build(&c->scene, &bo, &c->bvh2, &err) != LANES_OK) cli_fail("compare: %s", err.message);
     bool need[3] = {false, false, false};
     for (int i = 0; i < c->isa_count; i++)
         need[width_slot(lanes_kernels_for(c->isas[i])->wide_width)] = true;
     for (int s = 0; s < 3; s++)
-        if (need[s] && !lanes_wbvh_from_bvh2(&c->bvh2, 4 << s, &c->wide[s], &err))
+        if (need[s] && lanes_wbvh_from_bvh2(&c->bvh2, 4 << s, &c->wide[s], &err) != LANES_OK)
             cli_fail("compare: %s", err.message);
-    if (!lanes_embree_create(&c->scene, o->embree_isa, o->threads, &c->embree, &err))
+    if (lanes_embree_create(&c->scene, o->embree_isa, o->threads, &c->embree, &err) != LANES_OK)
         cli_fail("compare: %s", err.message);
     double eb = lanes_embree_build_seconds(c->embree);
     if (!o->json) {
@@ -926,7 +718,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     c->height = (int)lround((double)o->rays / c->width);
     if (c->height < 1) c->height = 1;
     size_t np = 0;
-    lanes_ray *primary = camera_rays(&c->scene, c->width, c->height, &np);
+    lanes_ray *primary = ray_set_camera(&c->scene, c->width, c->height, RAY_ORDER_MORTON8, &np);
     lanes_hit *phits = malloc(np * sizeof *phits);
     if (!primary || !phits) cli_fail("compare: out of memory for %zu rays", np);
     {
@@ -936,10 +728,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         pool_run(&c->pools[c->pool_count - 1], lanes_work, &job, np);
     }
     size_t npts = 0, nshadow = 0;
-    surface_point *pts = surface_points(&c->scene, primary, phits, np, &npts);
-    lanes_ray *shadow = pts ? shadow_rays(&c->scene, pts, npts, &nshadow) : NULL;
-    lanes_ray *diffuse = pts ? diffuse_rays(pts, npts) : NULL;
-    lanes_ray *shuffle = diffuse ? shuffled(diffuse, npts) : NULL;
+    surface_point *pts = ray_set_surface_points(&c->scene, primary, phits, np, &npts);
+    lanes_ray *shadow = pts ? ray_set_shadow(&c->scene, pts, npts, &nshadow) : NULL;
+    lanes_ray *diffuse = pts ? ray_set_diffuse(pts, npts) : NULL;
+    lanes_ray *shuffle = diffuse ? ray_set_shuffled(diffuse, npts) : NULL;
     if (!shuffle || !shadow) cli_fail("compare: out of memory for the secondary rays");
     if (!o->json) {
         printf("rays:     %dx%d camera rays (%zu hit), %zu shadow, %zu diffuse; median of %d runs\n\n",
@@ -969,7 +761,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             printf("  %-10s %-17s %8.4f%%  (%zu of %zu differ: %zu ties, %zu grazing, %zu other)\n",
                    lanes_isa_name(ag->isa), kind_names[ag->kind],
                    ag->rays ? 100.0 * (double)ag->agree / (double)ag->rays : 100.0,
-                   ag->rays - ag->agree, ag->rays, ag->ties, ag->grazing, ag->other);
+                   ag->rays - ag->agree, ag->rays, ag->differ.ties, ag->differ.grazing, ag->differ.other);
         }
     }
     if (o->csv) write_csv(o->csv, c);

@@ -113,7 +113,7 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
 
     lanes_scene scene;
     lanes_error err;
-    if (!lanes_scene_load(scene_spec, &scene, &err)) cli_fail("%s", err.message);
+    if (lanes_scene_load(scene_spec, &scene, &err) != LANES_OK) cli_fail("%s", err.message);
     lanes_scene_plan plan;
     lanes_scene_plan_make(&scene, accuracy, &plan);
     po.base.accuracy = plan.accuracy;
@@ -139,8 +139,9 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
             cli_fail("%s", msg[0] ? msg : lanes_status_name(st));
         }
         po.base.api_accel = api_accel;
-    } else if (!lanes_render_accel_build(&scene, packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
-                                         po.base.threads, &accel, &err)) {
+    } else if (lanes_render_accel_build(&scene,
+                                        packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
+                                        po.base.threads, &accel, &err) != LANES_OK) {
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);
     }
@@ -152,22 +153,21 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     lanes_render_result r;
     bool ok;
     if (packets) {
-        ok = lanes_packet_render(&scene, &accel, &po, &r, NULL, &err);
+        ok = lanes_packet_render(&scene, &accel, &po, &r, NULL, &err) == LANES_OK;
     } else {
         po.base.scheme = (lanes_scheme)single_scheme;
-        ok = lanes_render(&scene, &accel, &po.base, &r, &err);
+        ok = lanes_render(&scene, &accel, &po.base, &r, &err) == LANES_OK;
     }
     if (!ok) {
         release_accels(&accel, device, api_accel);
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);
     }
-    char msg[512];
-    if (!lanes_image_write(out_path, r.width, r.height, r.rgb, msg, sizeof msg)) {
+    if (lanes_image_write(out_path, r.width, r.height, r.rgb, &err) != LANES_OK) {
         lanes_render_result_free(&r);
         release_accels(&accel, device, api_accel);
         lanes_scene_free(&scene);
-        cli_fail("%s", msg);
+        cli_fail("%s", err.message);
     }
     printf("%s: %zu triangles, BVH built in %.3f s\n", scene.name, scene.triangle_count, build_s);
     printf("rendered %dx%d, %d spp, scheme %s", r.width, r.height, po.base.spp, scheme_name);

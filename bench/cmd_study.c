@@ -18,8 +18,8 @@
 #include "bench/cli_common.h"
 #ifdef LANES_HAVE_COMPARE
 #include "bench/embree_adapter.h"
+#include "bench/ray_sets.h"
 #endif
-#include "build/camera.h"
 #include "build/scene_load.h"
 #include "trace/packet_render.h"
 #include "trace/render.h"
@@ -93,8 +93,8 @@ static double timed(const lanes_scene *scene, const lanes_render_accel *accel, b
     for (int i = 0; i < reps; i++) {
         lanes_render_result r;
         lanes_error err;
-        bool ok = packets ? lanes_packet_render(scene, accel, po, &r, NULL, &err)
-                          : lanes_render(scene, accel, &po->base, &r, &err);
+        bool ok = packets ? lanes_packet_render(scene, accel, po, &r, NULL, &err) == LANES_OK
+                          : lanes_render(scene, accel, &po->base, &r, &err) == LANES_OK;
         if (!ok) cli_fail("study: %s", err.message);
         t[i] = r.seconds;
         *rays = r.rays;
@@ -146,7 +146,7 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
     lanes_render_result r;
     lanes_error err;
     po.count = true;
-    if (!lanes_packet_render(scene, accel, &po, &r, &m, &err)) cli_fail("study: %s", err.message);
+    if (lanes_packet_render(scene, accel, &po, &r, &m, &err) != LANES_OK) cli_fail("study: %s", err.message);
     lanes_render_result_free(&r);
 
     const char *qname = lanes_queue_name(queue);
@@ -217,37 +217,14 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
 /* The study's primary rays alone, through lanes' packet traversal at each
  * set and through Embree (rtcIntersect1, and rtcIntersect16 with the
  * coherent flag, its best on such rays), so the JSON carries Embree's rows
- * on the same rays. Rays are pixel centres of the study's camera and size,
- * in 32x32-pixel quadrants (one lanes packet each) made of 4x4 tiles (one
- * 16-lane group, one rtcIntersect16 packet). Only trace calls are timed;
+ * on the same rays. Rays are pixel centres of the study's camera and size
+ * in RAY_ORDER_QUADRANTS (ray_sets.h). Only trace calls are timed;
  * lanes' packet frusta are built inside the clock. */
-static lanes_ray *quadrant_rays(const lanes_scene *s, int w, int h, size_t *count)
-{
-    lanes_view view = lanes_view_make(&s->camera, w, h);
-    vec3 eye = view.eye;
-    lanes_ray *rays = malloc((size_t)w * (size_t)h * sizeof *rays);
-    if (!rays) return NULL;
-    size_t n = 0;
-    for (int qy = 0; qy < h; qy += 32)
-        for (int qx = 0; qx < w; qx += 32)
-            for (int ty = qy; ty < qy + 32; ty += 4)
-                for (int tx = qx; tx < qx + 32; tx += 4)
-                    for (int y = ty; y < ty + 4; y++)
-                        for (int x = tx; x < tx + 4; x++) {
-                            if (x >= w || y >= h) continue;
-                            vec3 d = lanes_view_dir(&view, (float)x + 0.5f, (float)y + 0.5f);
-                            rays[n++] = (lanes_ray){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, INFINITY};
-                            lanes_ray_prepare(&rays[n - 1]);
-                        }
-    *count = n;
-    return rays;
-}
-
 static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_bvh2 *bvh,
                          const study_plan *plan)
 {
     size_t n = 0;
-    lanes_ray *rays = quadrant_rays(scene, plan->width, plan->height, &n);
+    lanes_ray *rays = ray_set_camera(scene, plan->width, plan->height, RAY_ORDER_QUADRANTS, &n);
     lanes_rays soa;
     float *tfar0 = malloc((n + 1) * sizeof(float)), *u = malloc((n + LANES_MAX_W) * sizeof(float));
     float *v = malloc((n + LANES_MAX_W) * sizeof(float));
@@ -255,7 +232,8 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
     if (!rays || !tfar0 || !u || !v || !prim || !lanes_rays_alloc(&soa, n)) cli_fail("study: out of memory");
     lanes_error err;
     lanes_embree *e = NULL;
-    if (!lanes_embree_create(scene, lanes_embree_isa_best(), 0, &e, &err)) cli_fail("study: %s", err.message);
+    if (lanes_embree_create(scene, lanes_embree_isa_best(), 0, &e, &err) != LANES_OK)
+        cli_fail("study: %s", err.message);
     unsigned csr = lanes_fp_fast_enter();
     double t[64];
     int reps = plan->reps < 64 ? plan->reps : 64;
@@ -300,7 +278,8 @@ static void primary_rows(row_list *rows, const lanes_scene *scene, const lanes_b
     for (size_t mi = 0; mi < sizeof methods / sizeof methods[0]; mi++) {
         if (!lanes_embree_supports(e, methods[mi].m)) continue;
         lanes_embree_batch b;
-        if (!lanes_embree_batch_init(&b, methods[mi].m, false, rays, n, &err)) cli_fail("study: %s", err.message);
+        if (lanes_embree_batch_init(&b, methods[mi].m, false, rays, n, &err) != LANES_OK)
+            cli_fail("study: %s", err.message);
         for (int rep = 0; rep < reps; rep++) {
             lanes_embree_batch_reset(&b);
             uint64_t t0 = cli_now_ns();
@@ -420,6 +399,38 @@ static void md_value(FILE *f, double x, const char *fmt)
     }
 }
 
+/* The studied sets' families (in the sets' order) and widths (ascending),
+ * each once: the rows and columns of the width tables and the plots' series. */
+typedef struct {
+    const char *families[LANES_ISA_COUNT];
+    int nfamilies;
+    int widths[LANES_ISA_COUNT];
+    int nwidths;
+    bool any_emulated;
+} set_axes;
+
+static set_axes study_axes(const study_plan *plan)
+{
+    set_axes a = {.nfamilies = 0};
+    for (int j = 0; j < plan->nsets; j++) {
+        int w = lanes_isa_lanes(plan->sets[j]);
+        const char *fam = lanes_isa_family(plan->sets[j]);
+        bool seen_w = false, seen_f = false;
+        for (int k = 0; k < a.nwidths; k++) seen_w = seen_w || a.widths[k] == w;
+        for (int k = 0; k < a.nfamilies; k++) seen_f = seen_f || strcmp(a.families[k], fam) == 0;
+        if (!seen_w) a.widths[a.nwidths++] = w;
+        if (!seen_f) a.families[a.nfamilies++] = fam;
+        a.any_emulated = a.any_emulated || lanes_isa_emulated(plan->sets[j]);
+    }
+    for (int i = 1; i < a.nwidths; i++)
+        for (int k = i; k > 0 && a.widths[k] < a.widths[k - 1]; k--) {
+            int t = a.widths[k];
+            a.widths[k] = a.widths[k - 1];
+            a.widths[k - 1] = t;
+        }
+    return a;
+}
+
 static void write_tables(const char *path, const row_list *rows, char scenes[][64], int nscenes,
                          const study_plan *plan)
 {
@@ -534,24 +545,9 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
     }
 
     /* Width against instruction set: the sets of one family at each width. */
-    int widths[LANES_ISA_COUNT], nwidths = 0;
-    const char *families[LANES_ISA_COUNT];
-    int nfamilies = 0;
-    for (int j = 0; j < plan->nsets; j++) {
-        int w = lanes_isa_lanes(plan->sets[j]);
-        const char *fam = lanes_isa_family(plan->sets[j]);
-        bool seen_w = false, seen_f = false;
-        for (int k = 0; k < nwidths; k++) seen_w = seen_w || widths[k] == w;
-        for (int k = 0; k < nfamilies; k++) seen_f = seen_f || strcmp(families[k], fam) == 0;
-        if (!seen_w) widths[nwidths++] = w;
-        if (!seen_f) families[nfamilies++] = fam;
-    }
-    for (int a = 1; a < nwidths; a++) /* ascending */
-        for (int b = a; b > 0 && widths[b] < widths[b - 1]; b--) {
-            int t = widths[b];
-            widths[b] = widths[b - 1];
-            widths[b - 1] = t;
-        }
+    const set_axes axes = study_axes(plan);
+    const int *widths = axes.widths, nwidths = axes.nwidths, nfamilies = axes.nfamilies;
+    const char *const *families = axes.families;
     fprintf(f, "\n## Width against instruction set (render seconds: packets with the MAX queue / single ray on "
                "the wide BVH)\n\nOne row per instruction-set family: along a row the width changes and the "
                "instruction set stays; down a column the instruction set changes and the width stays. "
@@ -650,16 +646,10 @@ static void write_plots(const char *dir, const row_list *rows, char scenes[][64]
         static const char *const methods[][3] = {{"packet", "MAX", "packets (MAX queue)"},
                                                  {"ranged", "MAX", "ranged packets"},
                                                  {"wide", "none", "single ray, wide BVH"}};
-        const char *families[LANES_ISA_COUNT];
-        int nfamilies = 0;
-        bool any_emulated = false;
-        for (int j = 0; j < plan->nsets; j++) {
-            const char *fam = lanes_isa_family(plan->sets[j]);
-            bool seen = false;
-            for (int k = 0; k < nfamilies; k++) seen = seen || strcmp(families[k], fam) == 0;
-            if (!seen) families[nfamilies++] = fam;
-            any_emulated = any_emulated || lanes_isa_emulated(plan->sets[j]);
-        }
+        const set_axes axes = study_axes(plan);
+        const char *const *families = axes.families;
+        const int nfamilies = axes.nfamilies;
+        const bool any_emulated = axes.any_emulated;
         for (int m = 0; m < 3 && used > 0 && (size_t)used < sizeof script; m++) {
             used += snprintf(script + used, sizeof script - (size_t)used, "set title '%s'\nplot ", methods[m][2]);
             for (int k = 0; k < nfamilies && used > 0 && (size_t)used < sizeof script; k++)
@@ -811,17 +801,17 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
     for (int s = 0; s < nspecs; s++) {
         lanes_scene scene;
         lanes_error err;
-        if (!lanes_scene_load(scene_specs[s], &scene, &err)) cli_fail("%s", err.message);
+        if (lanes_scene_load(scene_specs[s], &scene, &err) != LANES_OK) cli_fail("%s", err.message);
         snprintf(scenes[s], sizeof scenes[s], "%.63s", scene.name);
         lanes_render_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
         lanes_render_accel *by_width[17] = {0};
         /* the BVH2 is shared; each wide width gets its own collapse */
-        if (!lanes_render_accel_build(&scene, 0, 0, &accel4, &err)) cli_fail("%s", err.message);
+        if (lanes_render_accel_build(&scene, 0, 0, &accel4, &err) != LANES_OK) cli_fail("%s", err.message);
         accel8.bvh2 = accel4.bvh2;
         accel16.bvh2 = accel4.bvh2;
-        if (!lanes_wbvh_from_bvh2(&accel4.bvh2, 4, &accel4.wide, &err) ||
-            !lanes_wbvh_from_bvh2(&accel4.bvh2, 8, &accel8.wide, &err) ||
-            !lanes_wbvh_from_bvh2(&accel4.bvh2, 16, &accel16.wide, &err))
+        if (lanes_wbvh_from_bvh2(&accel4.bvh2, 4, &accel4.wide, &err) != LANES_OK ||
+            lanes_wbvh_from_bvh2(&accel4.bvh2, 8, &accel8.wide, &err) != LANES_OK ||
+            lanes_wbvh_from_bvh2(&accel4.bvh2, 16, &accel16.wide, &err) != LANES_OK)
             cli_fail("%s", err.message);
         by_width[4] = &accel4, by_width[8] = &accel8, by_width[16] = &accel16;
 

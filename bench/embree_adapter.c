@@ -118,38 +118,36 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-bool lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int threads,
-                         lanes_embree **out, lanes_error *err)
+lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int threads,
+                                 lanes_embree **out, lanes_error *err)
 {
+    lanes_status status = LANES_OK;
     *out = NULL;
     if (isa < 0 || isa >= LANES_EMBREE_ISA_COUNT) {
-        lanes_error_set(err, "embree: unknown ISA (valid: %s)", lanes_embree_isa_all_names());
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: unknown ISA (valid: %s)",
+                               lanes_embree_isa_all_names());
     }
     if (!lanes_embree_isa_cpu_can_run(isa)) {
-        lanes_error_set(err, "embree: this CPU cannot run Embree's %s kernels",
-                        lanes_embree_isa_name(isa));
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: this CPU cannot run Embree's %s kernels",
+                               lanes_embree_isa_name(isa));
     }
     if (scene->triangle_count == 0 || scene->triangle_count > UINT32_MAX / 3) {
-        lanes_error_set(err, "embree: %zu triangles (need 1 .. %u)", scene->triangle_count,
-                        UINT32_MAX / 3);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: %zu triangles (need 1 .. %u)",
+                               scene->triangle_count, UINT32_MAX / 3);
     }
     lanes_embree *e = calloc(1, sizeof *e);
     if (!e) {
-        lanes_error_set(err, "embree: out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "embree: out of memory");
     }
     e->isa = isa;
     char config[96];
     snprintf(config, sizeof config, "isa=%s,threads=%d", isa_names[isa], threads < 0 ? 0 : threads);
     e->device = rtcNewDevice(config);
     if (!e->device) {
-        lanes_error_set(err, "embree: rtcNewDevice(\"%s\") failed (error %d)", config,
-                        (int)rtcGetDeviceError(NULL));
+        status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: rtcNewDevice(\"%s\") failed (error %d)",
+                                 config, (int)rtcGetDeviceError(NULL));
         free(e);
-        return false;
+        return status;
     }
     rtcSetDeviceErrorFunction(e->device, on_error, e);
     e->native[LANES_EMBREE_1] = true;
@@ -169,10 +167,11 @@ bool lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int thr
     unsigned *idx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                             3 * sizeof(unsigned), n);
     if (!v || !idx) {
-        lanes_error_set(err, "embree: cannot allocate buffers for %zu triangles: %s", n, e->error);
+        status = lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                 "embree: cannot allocate buffers for %zu triangles: %s", n, e->error);
         rtcReleaseGeometry(g);
         lanes_embree_destroy(e);
-        return false;
+        return status;
     }
     memcpy(v, scene->verts, n * 9 * sizeof(float));
     for (size_t i = 0; i < 3 * n; i++) idx[i] = (unsigned)i;
@@ -187,12 +186,12 @@ bool lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int thr
     e->build_seconds = now_seconds() - t0;
     lanes_fp_restore(csr);
     if (e->error[0]) {
-        lanes_error_set(err, "embree: building the scene: %s", e->error);
+        status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: building the scene: %s", e->error);
         lanes_embree_destroy(e);
-        return false;
+        return status;
     }
     *out = e;
-    return true;
+    return LANES_OK;
 }
 
 void lanes_embree_destroy(lanes_embree *e)
@@ -261,8 +260,8 @@ static void *alloc_aligned(size_t bytes)
         }                                                                                  \
     } while (0)
 
-bool lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool occlusion,
-                             const lanes_ray *rays, size_t n, lanes_error *err)
+lanes_status lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool occlusion,
+                                     const lanes_ray *rays, size_t n, lanes_error *err)
 {
     memset(b, 0, sizeof *b);
     b->method = m;
@@ -273,8 +272,7 @@ bool lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool 
     size_t packets = (n + w - 1) / w;
     if (n == 0) packets = 0;
     if (packets > SIZE_MAX / 2 / elem) {
-        lanes_error_set(err, "embree: %zu rays is too many", n);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: %zu rays is too many", n);
     }
     b->bytes = packets * elem;
     b->data = alloc_aligned(b->bytes);
@@ -283,15 +281,14 @@ bool lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool 
     b->valid_tail = alloc_aligned(16 * sizeof(int));
     if (!b->data || !b->pristine || !b->valid_full || !b->valid_tail) {
         lanes_embree_batch_free(b);
-        lanes_error_set(err, "embree: out of memory for %zu rays", n);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "embree: out of memory for %zu rays", n);
     }
     size_t tail = n % w;
     for (size_t j = 0; j < 16; j++) {
         b->valid_full[j] = j < w ? -1 : 0;
         b->valid_tail[j] = (tail == 0 ? j < w : j < tail) ? -1 : 0;
     }
-    if (n == 0) return true;
+    if (n == 0) return LANES_OK;
     memset(b->data, 0, b->bytes); /* padding and unused hit fields: a deterministic pristine copy */
 
     switch (m) {
@@ -316,7 +313,7 @@ bool lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool 
         break;
     }
     memcpy(b->pristine, b->data, b->bytes);
-    return true;
+    return LANES_OK;
 }
 
 void lanes_embree_batch_free(lanes_embree_batch *b)

@@ -57,10 +57,10 @@ typedef struct lanes_embree lanes_embree;
 
 /* Builds the scene on a new device ("isa=...,threads=N"; threads 0 = all
  * hardware threads, which only the build uses: trace calls run on the
- * caller's thread). The commit is timed with FTZ/DAZ set. False with a
- * message on an ISA the CPU cannot run, Embree errors, or no memory. */
-bool lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int threads,
-                         lanes_embree **out, lanes_error *err);
+ * caller's thread). The commit is timed with FTZ/DAZ set. An error, with a
+ * message, on an ISA the CPU cannot run, Embree errors, or no memory. */
+lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa, int threads,
+                                 lanes_embree **out, lanes_error *err);
 void lanes_embree_destroy(lanes_embree *e);
 double lanes_embree_build_seconds(const lanes_embree *e);
 lanes_embree_isa lanes_embree_get_isa(const lanes_embree *e);
@@ -85,8 +85,8 @@ typedef struct lanes_embree_batch {
     int *valid_tail; /* the last packet's valid lanes */
 } lanes_embree_batch;
 
-bool lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool occlusion,
-                             const lanes_ray *rays, size_t n, lanes_error *err);
+lanes_status lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method m, bool occlusion,
+                                     const lanes_ray *rays, size_t n, lanes_error *err);
 void lanes_embree_batch_free(lanes_embree_batch *b);
 /* Restores every ray as it was at init (not timed by the callers). */
 void lanes_embree_batch_reset(lanes_embree_batch *b);

@@ -6,15 +6,14 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cmath>
-#include <cstdio>
 #include <string>
 #include <vector>
 
 namespace {
 
-void set_error(char *error, size_t size, const std::string &text)
+lanes_status fail(lanes_error *err, const std::string &text)
 {
-    if (error && size) std::snprintf(error, size, "%s", text.c_str());
+    return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s", text.c_str());
 }
 
 float srgb_encode(float x)
@@ -31,14 +30,12 @@ bool holds_floats(const std::string &format)
 
 } // namespace
 
-extern "C" bool lanes_image_write(const char *path, int width, int height, const float *rgb,
-                                  char *error, size_t error_size)
+extern "C" lanes_status lanes_image_write(const char *path, int width, int height, const float *rgb,
+                                          lanes_error *err)
 {
     auto out = OIIO::ImageOutput::create(path);
     if (!out) {
-        set_error(error, error_size,
-                  std::string(path) + ": cannot write this image format: " + OIIO::geterror());
-        return false;
+        return fail(err, std::string(path) + ": cannot write this image format: " + OIIO::geterror());
     }
     bool linear = holds_floats(out->format_name());
     OIIO::ImageSpec spec(width, height, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
@@ -48,33 +45,29 @@ extern "C" bool lanes_image_write(const char *path, int width, int height, const
         for (float &v : pixels) v = srgb_encode(v);
     if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) ||
         !out->close()) {
-        set_error(error, error_size, std::string(path) + ": " + out->geterror());
-        return false;
+        return fail(err, std::string(path) + ": " + out->geterror());
     }
-    return true;
+    return LANES_OK;
 }
 
-extern "C" bool lanes_image_compare(const char *path_a, const char *path_b, double threshold,
-                                    lanes_image_diff *diff, char *error, size_t error_size)
+extern "C" lanes_status lanes_image_compare(const char *path_a, const char *path_b, double threshold,
+                                            lanes_image_diff *diff, lanes_error *err)
 {
     OIIO::ImageBuf a(path_a), b(path_b);
     if (!a.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
-        set_error(error, error_size, std::string(path_a) + ": " + a.geterror());
-        return false;
+        return fail(err, std::string(path_a) + ": " + a.geterror());
     }
     if (!b.read(0, 0, true, OIIO::TypeDesc::FLOAT)) {
-        set_error(error, error_size, std::string(path_b) + ": " + b.geterror());
-        return false;
+        return fail(err, std::string(path_b) + ": " + b.geterror());
     }
     if (a.spec().width != b.spec().width || a.spec().height != b.spec().height ||
         a.spec().nchannels != b.spec().nchannels) {
-        set_error(error, error_size, std::string("images differ in size: ") + path_a + " and " + path_b);
-        return false;
+        return fail(err, std::string("images differ in size: ") + path_a + " and " + path_b);
     }
     auto r = OIIO::ImageBufAlgo::compare(a, b, static_cast<float>(threshold), static_cast<float>(threshold));
     diff->mean_error = r.meanerror;
     diff->max_error = r.maxerror;
     diff->pixels_over = static_cast<long long>(r.nfail);
     diff->pixels = static_cast<long long>(a.spec().width) * a.spec().height;
-    return true;
+    return LANES_OK;
 }

@@ -3,8 +3,7 @@
 #ifndef LANES_BENCH_IMAGE_IO_H
 #define LANES_BENCH_IMAGE_IO_H
 
-#include <stdbool.h>
-#include <stddef.h>
+#include "build/error.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -14,8 +13,7 @@ extern "C" {
  * (EXR, HDR, float TIFF) get linear values; 8-bit formats (PNG, JPEG, ...)
  * get sRGB-encoded values clamped to [0, 1]. The format follows the file
  * name's extension, as OpenImageIO decides it. */
-bool lanes_image_write(const char *path, int width, int height, const float *rgb, char *error,
-                       size_t error_size);
+lanes_status lanes_image_write(const char *path, int width, int height, const float *rgb, lanes_error *err);
 
 /* Compares two image files pixel by pixel (OIIO's ImageBufAlgo::compare,
  * the engine behind idiff). Fails when they cannot be read or differ in
@@ -25,8 +23,8 @@ typedef struct lanes_image_diff {
     long long pixels_over;   /* pixels whose error exceeds the threshold */
     long long pixels;
 } lanes_image_diff;
-bool lanes_image_compare(const char *path_a, const char *path_b, double threshold,
-                         lanes_image_diff *diff, char *error, size_t error_size);
+lanes_status lanes_image_compare(const char *path_a, const char *path_b, double threshold,
+                                 lanes_image_diff *diff, lanes_error *err);
 
 #ifdef __cplusplus
 }

@@ -57,10 +57,10 @@ typedef struct lanes_bvh_build_options {
 void lanes_bvh_default_options(lanes_bvh_build_options *o);
 
 /* Builds over the scene's triangles. Degenerate triangles (NaN or infinite
- * coordinates) are left out of the tree. Returns false with a message on
+ * coordinates) are left out of the tree. An error with a message on
  * failure (out of memory, no triangles). */
-bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *opt,
-                      lanes_bvh2 *bvh, lanes_error *err);
+lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *opt, lanes_bvh2 *bvh,
+                              lanes_error *err);
 void lanes_bvh2_free(lanes_bvh2 *bvh);
 
 /* Wide BVH of `width` children (4, 8 or 16). Node i's child bounds are SoA:
@@ -91,7 +91,7 @@ typedef struct lanes_wbvh {
  * children of a wide node have consecutive indices, greater than its own;
  * the root is node 0. A BVH2 whose root is a leaf gives one wide node
  * holding that leaf in slot 0. */
-bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err);
+lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err);
 void lanes_wbvh_free(lanes_wbvh *w);
 
 /* Memory in bytes, for reports. The BVH2 counts its nodes, prim_index and

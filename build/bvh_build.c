@@ -911,14 +911,16 @@ static void builder_free(builder *B)
     }
 }
 
-static bool fail(lanes_error *err, const char *msg)
+/* The builder's reasons are fixed texts; running out of memory is the one
+ * that is not the input's fault. */
+static lanes_status fail(lanes_error *err, const char *why)
 {
-    if (err) snprintf(err->message, sizeof err->message, "bvh build: %s", msg);
-    return false;
+    lanes_status status = strcmp(why, "out of memory") == 0 ? LANES_ERR_OUT_OF_MEMORY : LANES_ERR_BAD_INPUT;
+    return lanes_error_set(err, status, "bvh build: %s", why);
 }
 
-bool lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *opt,
-                      lanes_bvh2 *bvh, lanes_error *err)
+lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_options *opt, lanes_bvh2 *bvh,
+                              lanes_error *err)
 {
     double t0 = now_seconds();
     lanes_bvh_build_options defaults;
@@ -1088,5 +1090,5 @@ done:
         return fail(err, why);
     }
     bvh->build_seconds = now_seconds() - t0;
-    return true;
+    return LANES_OK;
 }

@@ -52,10 +52,12 @@ void lanes_wbvh_free(lanes_wbvh *w)
     memset(w, 0, sizeof *w);
 }
 
-static bool fail(lanes_error *err, const char *msg)
+/* The builder's reasons are fixed texts; running out of memory is the one
+ * that is not the input's fault. */
+static lanes_status fail(lanes_error *err, const char *why)
 {
-    if (err) snprintf(err->message, sizeof err->message, "wide bvh: %s", msg);
-    return false;
+    lanes_status status = strcmp(why, "out of memory") == 0 ? LANES_ERR_OUT_OF_MEMORY : LANES_ERR_BAD_INPUT;
+    return lanes_error_set(err, status, "wide bvh: %s", why);
 }
 
 enum { FILL_BLOCK = 2048 };
@@ -116,7 +118,7 @@ static void fill_block(void *ctx, size_t item, int tid)
     f->sah[item] = sah;
 }
 
-bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err)
+lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err)
 {
     double t0 = now_seconds();
     if (!out) return fail(err, "no output");
@@ -255,5 +257,5 @@ bool lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lan
     }
     out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
     out->collapse_seconds = now_seconds() - t0;
-    return true;
+    return LANES_OK;
 }

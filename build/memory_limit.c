@@ -132,14 +132,15 @@ const char *lanes_memory_size_text(char *buf, size_t size, double bytes)
     return buf;
 }
 
-/* What `limit` allows, as "this machine has 23.4 GiB of memory"; false,
+/* What `limit` allows, as "this machine has 23.4 GiB of memory"; an error,
  * with the message, when LANES_MEMORY_LIMIT is not a size. */
-static bool describe(const lanes_memory_limit *limit, char *note, size_t size, lanes_error *err)
+static lanes_status describe(const lanes_memory_limit *limit, char *note, size_t size, lanes_error *err)
 {
     if (limit->bad_env) {
-        lanes_error_set(err, "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
-                        limit->bad_env);
-        return false;
+        return lanes_error_set(
+            err, LANES_ERR_BAD_INPUT,
+            "LANES_MEMORY_LIMIT '%s' is not a size (bytes, or a number followed by K, M or G)",
+            limit->bad_env);
     }
     static const char *const has[] = {
         [LANES_MEMORY_PHYSICAL] = "this machine has",
@@ -148,24 +149,27 @@ static bool describe(const lanes_memory_limit *limit, char *note, size_t size, l
     };
     char have[32];
     snprintf(note, size, "%s %s of memory", has[limit->source], lanes_memory_size_text(have, sizeof have, limit->bytes));
-    return true;
+    return LANES_OK;
 }
 
-bool lanes_memory_fits(const char *what, double bytes, lanes_error *err)
+lanes_status lanes_memory_fits(const char *what, double bytes, lanes_error *err)
 {
+    lanes_status status;
     lanes_memory_limit limit = lanes_memory_limit_read();
     char note[96], need[32];
-    if (!describe(&limit, note, sizeof note, err)) return false;
-    if (bytes <= limit.bytes) return true;
-    lanes_error_set(err, "%s needs about %s; %s", what, lanes_memory_size_text(need, sizeof need, bytes), note);
-    return false;
+    if ((status = describe(&limit, note, sizeof note, err)) != LANES_OK) return status;
+    if (bytes <= limit.bytes) return LANES_OK;
+    return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "%s needs about %s; %s", what,
+                           lanes_memory_size_text(need, sizeof need, bytes), note);
 }
 
-bool lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err)
+lanes_status lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err)
 {
+    lanes_status status;
     lanes_memory_limit limit = lanes_memory_limit_read();
-    if (!describe(&limit, scene->budget_note, sizeof scene->budget_note, err)) return false;
+    if ((status = describe(&limit, scene->budget_note, sizeof scene->budget_note, err)) != LANES_OK)
+        return status;
     const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
     scene->triangle_budget = (size_t)fmin(floor(limit.bytes / per_triangle), (double)LANES_SCENE_MAX_TRIANGLES);
-    return true;
+    return LANES_OK;
 }

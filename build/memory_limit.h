@@ -38,20 +38,20 @@ lanes_memory_limit lanes_memory_limit_read(void);
  * the hierarchies are mounted, physical the machine's memory in bytes. */
 lanes_memory_limit lanes_memory_limit_from(const char *proc_cgroup, const char *cgroup_root, double physical);
 
-/* false, with "<what> needs about X GiB; this machine has Y GiB of memory"
+/* LANES_ERR_OUT_OF_MEMORY, with "<what> needs about X GiB; this machine has Y GiB of memory"
  * (or what limits it instead: a cgroup, LANES_MEMORY_LIMIT), when bytes
  * exceed what lanes_memory_limit_read says this process may use:
  * allocations that large may succeed (Linux overcommits) and end in the OOM
- * killer instead. Also false, with a message, when LANES_MEMORY_LIMIT is
- * set to something that is not a size. */
-bool lanes_memory_fits(const char *what, double bytes, lanes_error *err);
+ * killer instead. LANES_ERR_BAD_INPUT, with a message, when
+ * LANES_MEMORY_LIMIT is set to something that is not a size. */
+lanes_status lanes_memory_fits(const char *what, double bytes, lanes_error *err);
 
 /* The loaders' policy for a scene they are about to fill, which is loaded
  * to be traced: a triangle budget (scene->triangle_budget, budget_note)
  * from what the scene and its BVHs need per triangle and what this process
- * may use, read once here rather than on every append. False, with a
- * message, when LANES_MEMORY_LIMIT is not a size. */
-bool lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err);
+ * may use, read once here rather than on every append. LANES_ERR_BAD_INPUT,
+ * with a message, when LANES_MEMORY_LIMIT is not a size. */
+lanes_status lanes_scene_limit_to_memory(lanes_scene *scene, lanes_error *err);
 
 /* "29.2 GiB", "9.4 MiB": one decimal in the largest unit that keeps a
  * leading digit. Returns buf. */

@@ -34,15 +34,15 @@
  * per use). Polygons are triangulated; points and lines are dropped.
  * Vertices at the same position are joined, so the result has
  * connectivity whatever the format stored per corner. */
-bool lanes_mesh_read(const char *path, lanes_mesh *out, lanes_error *err);
+lanes_status lanes_mesh_read(const char *path, lanes_mesh *out, lanes_error *err);
 
 /* lanes_mesh_read, then lanes_scene_add_mesh with the extra transform xf
  * (NULL: none) and the given material. */
-bool lanes_mesh_import(lanes_scene *scene, const char *path, const lanes_xform *xf,
-                       uint32_t material, lanes_error *err);
+lanes_status lanes_mesh_import(lanes_scene *scene, const char *path, const lanes_xform *xf, uint32_t material,
+                               lanes_error *err);
 
-/* Only the streaming validator (no Assimp). Returns true for formats it
+/* Only the streaming validator (no Assimp). LANES_OK for formats it
  * does not know. Exposed for tests. */
-bool lanes_mesh_precheck(const char *path, lanes_error *err);
+lanes_status lanes_mesh_precheck(const char *path, lanes_error *err);
 
 #endif

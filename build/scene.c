@@ -6,20 +6,8 @@
 #include "build/memory_limit.h"
 
 #include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-void lanes_error_set(lanes_error *err, const char *fmt, ...)
-{
-    if (!err)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err->message, sizeof err->message, fmt, ap);
-    va_end(ap);
-}
 
 void lanes_scene_init(lanes_scene *scene)
 {
@@ -92,13 +80,13 @@ static bool grow(void **array, size_t *cap, size_t need, size_t size)
     return true;
 }
 
-bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
+lanes_status lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
 {
     size_t n = scene->triangle_count;
     if (extra > LANES_SCENE_MAX_TRIANGLES || n + extra > LANES_SCENE_MAX_TRIANGLES) {
-        lanes_error_set(err, "too many triangles: %zu + %zu exceeds the limit of %zu", n, extra,
-                        LANES_SCENE_MAX_TRIANGLES);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "too many triangles: %zu + %zu exceeds the limit of %zu", n, extra,
+                               LANES_SCENE_MAX_TRIANGLES);
     }
     size_t need = n + extra;
     /* Refuse a scene while it is still small if its BVHs will not fit,
@@ -107,12 +95,11 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
         char bytes[32];
         lanes_memory_size_text(bytes, sizeof bytes,
                                (double)need * (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE));
-        lanes_error_set(err, "a scene of %zu triangles (to load and trace) needs about %s; %s", need, bytes,
-                        scene->budget_note);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY,
+                               "a scene of %zu triangles (to load and trace) needs about %s; %s", need, bytes,
+                               scene->budget_note);
     }
-    if (need <= scene->triangle_capacity)
-        return true;
+    if (need <= scene->triangle_capacity) return LANES_OK;
     /* Both arrays share one capacity; grow a copy of it for each so a
      * failure halfway leaves triangle_capacity describing both. */
     size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;
@@ -124,22 +111,21 @@ bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error
         scene->material_of = m;
     }
     if (!ok) {
-        lanes_error_set(err, "out of memory for %zu triangles", need);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for %zu triangles", need);
     }
     scene->triangle_capacity = cap_v < cap_m ? cap_v : cap_m;
-    return true;
+    return LANES_OK;
 }
 
-bool lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
-                              lanes_error *err)
+lanes_status lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
+                                      lanes_error *err)
 {
-    if (!lanes_scene_reserve_triangles(scene, 1, err))
-        return false;
+    lanes_status status;
+    if ((status = lanes_scene_reserve_triangles(scene, 1, err)) != LANES_OK) return status;
     size_t i = scene->triangle_count++;
     memcpy(scene->verts + 9 * i, v, 9 * sizeof(float));
     scene->material_of[i] = material;
-    return true;
+    return LANES_OK;
 }
 
 long lanes_scene_find_material(const lanes_scene *scene, const char *name)
@@ -150,58 +136,53 @@ long lanes_scene_find_material(const lanes_scene *scene, const char *name)
     return -1;
 }
 
-bool lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
-                              lanes_error *err)
+lanes_status lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
+                                      lanes_error *err)
 {
     if (memchr(m->name, '\0', sizeof m->name) == NULL) {
-        lanes_error_set(err, "material name is not terminated within %zu bytes", sizeof m->name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "material name is not terminated within %zu bytes",
+                               sizeof m->name);
     }
     if (lanes_scene_find_material(scene, m->name) >= 0) {
-        lanes_error_set(err, "material '%s' is defined twice", m->name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "material '%s' is defined twice", m->name);
     }
     if (scene->material_count >= UINT32_MAX) {
-        lanes_error_set(err, "too many materials");
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "too many materials");
     }
     void *p = scene->materials;
     bool ok = grow(&p, &scene->material_capacity, scene->material_count + 1, sizeof *m);
     scene->materials = p;
     if (!ok) {
-        lanes_error_set(err, "out of memory for materials");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for materials");
     }
     if (index)
         *index = (uint32_t)scene->material_count;
     scene->materials[scene->material_count++] = *m;
-    return true;
+    return LANES_OK;
 }
 
-bool lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l, lanes_error *err)
+lanes_status lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l, lanes_error *err)
 {
     void *p = scene->point_lights;
     bool ok = grow(&p, &scene->point_light_capacity, scene->point_light_count + 1, sizeof *l);
     scene->point_lights = p;
     if (!ok) {
-        lanes_error_set(err, "out of memory for lights");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for lights");
     }
     scene->point_lights[scene->point_light_count++] = *l;
-    return true;
+    return LANES_OK;
 }
 
-bool lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err)
+lanes_status lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err)
 {
     void *p = scene->area_lights;
     bool ok = grow(&p, &scene->area_light_capacity, scene->area_light_count + 1, sizeof *l);
     scene->area_lights = p;
     if (!ok) {
-        lanes_error_set(err, "out of memory for lights");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for lights");
     }
     scene->area_lights[scene->area_light_count++] = *l;
-    return true;
+    return LANES_OK;
 }
 
 void lanes_scene_frame_camera(lanes_scene *s)
@@ -237,60 +218,56 @@ static bool color_ok(const float c[3])
     return finite3(c) && c[0] >= 0.0f && c[1] >= 0.0f && c[2] >= 0.0f;
 }
 
-bool lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
+lanes_status lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
 {
     const char *name = scene->name[0] ? scene->name : "scene";
     if (scene->triangle_count == 0) {
-        lanes_error_set(err, "%s: no triangles", name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: no triangles", name);
     }
     if (scene->triangle_count > LANES_SCENE_MAX_TRIANGLES) {
-        lanes_error_set(err, "%s: %zu triangles exceed the limit", name, scene->triangle_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: %zu triangles exceed the limit", name,
+                               scene->triangle_count);
     }
     for (size_t i = 0; i < scene->material_count; i++) {
         const lanes_material *m = &scene->materials[i];
         if (memchr(m->name, '\0', sizeof m->name) == NULL) {
-            lanes_error_set(err, "%s: material %zu: name not terminated", name, i);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: material %zu: name not terminated", name,
+                                   i);
         }
         bool ok = (int)m->kind >= LANES_MAT_DIFFUSE && (int)m->kind <= LANES_MAT_EMISSIVE &&
                   color_ok(m->color) && color_ok(m->emission);
         if (m->kind == LANES_MAT_GLASS)
             ok = ok && isfinite(m->ior) && m->ior > 0.0f;
         if (!ok) {
-            lanes_error_set(err, "%s: material '%s' has an invalid kind, color, emission or ior",
-                            name, m->name);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "%s: material '%s' has an invalid kind, color, emission or ior", name,
+                                   m->name);
         }
     }
     for (size_t i = 0; i < scene->triangle_count; i++) {
         if (scene->material_of[i] >= scene->material_count) {
-            lanes_error_set(err, "%s: triangle %zu has material %u of %zu", name, i,
-                            scene->material_of[i], scene->material_count);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: triangle %zu has material %u of %zu", name,
+                                   i, scene->material_of[i], scene->material_count);
         }
         const float *v = scene->verts + 9 * i;
         if (!finite3(v) || !finite3(v + 3) || !finite3(v + 6)) {
-            lanes_error_set(err, "%s: triangle %zu has a non-finite vertex", name, i);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: triangle %zu has a non-finite vertex", name,
+                                   i);
         }
     }
     for (size_t i = 0; i < scene->point_light_count; i++) {
         const lanes_point_light *l = &scene->point_lights[i];
         if (!finite3(l->position) || !color_ok(l->intensity)) {
-            lanes_error_set(err, "%s: point light %zu: non-finite position or invalid intensity",
-                            name, i);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "%s: point light %zu: non-finite position or invalid intensity", name, i);
         }
     }
     for (size_t i = 0; i < scene->area_light_count; i++) {
         const lanes_area_light *l = &scene->area_lights[i];
         if (!finite3(l->corner) || !finite3(l->edge_u) || !finite3(l->edge_v) ||
             !color_ok(l->emission)) {
-            lanes_error_set(err, "%s: area light %zu: non-finite geometry or invalid emission",
-                            name, i);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "%s: area light %zu: non-finite geometry or invalid emission", name, i);
         }
     }
     const lanes_camera *c = &scene->camera;
@@ -306,18 +283,17 @@ bool lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
     double cl = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
     if (!finite3(c->eye) || !finite3(c->target) || !finite3(c->up) || !(fl > 0.0) ||
         !(cl > 1e-6 * fl * ul)) {
-        lanes_error_set(err,
-                        "%s: camera: eye, target and up must be finite, eye != target, "
-                        "and up not parallel to the view direction",
-                        name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: camera: eye, target and up must be finite, eye != target, "
+                               "and up not parallel to the view direction",
+                               name);
     }
     if (!(c->fov_y_degrees > 0.0f && c->fov_y_degrees < 180.0f) || c->width <= 0 ||
         c->height <= 0) {
-        lanes_error_set(err, "%s: camera: fov must be in (0, 180) and the size positive", name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: camera: fov must be in (0, 180) and the size positive", name);
     }
-    return true;
+    return LANES_OK;
 }
 
 void lanes_mesh_free(lanes_mesh *mesh)
@@ -392,28 +368,28 @@ void lanes_xform_apply(const lanes_xform *x, const float in[3], float out[3])
         out[i] = (float)(x->m[i][0] * p[0] + x->m[i][1] * p[1] + x->m[i][2] * p[2] + x->m[i][3]);
 }
 
-bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
-                          uint32_t material, const char *what, lanes_error *err)
+lanes_status lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
+                                  uint32_t material, const char *what, lanes_error *err)
 {
+    lanes_status status;
     if (!what)
         what = "mesh";
     if (material >= scene->material_count) {
-        lanes_error_set(err, "%s: material index %u does not exist (%zu materials)", what, material,
-                        scene->material_count);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: material index %u does not exist (%zu materials)", what, material,
+                               scene->material_count);
     }
     lanes_error sub;
-    if (!lanes_scene_reserve_triangles(scene, mesh->triangle_count, &sub)) {
-        lanes_error_set(err, "%s: %s", what, sub.message);
-        return false;
+    if (lanes_scene_reserve_triangles(scene, mesh->triangle_count, &sub) != LANES_OK) {
+        return lanes_error_set(err, sub.status, "%s: %s", what, sub.message);
     }
     /* Transform each vertex once, not once per triangle using it. */
     float *tv = NULL;
     if (mesh->vertex_count > 0) {
         if (mesh->vertex_count > SIZE_MAX / (3 * sizeof(float)) ||
             !(tv = malloc(mesh->vertex_count * 3 * sizeof(float)))) {
-            lanes_error_set(err, "%s: out of memory for %zu vertices", what, mesh->vertex_count);
-            return false;
+            return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory for %zu vertices", what,
+                                   mesh->vertex_count);
         }
     }
     for (size_t v = 0; v < mesh->vertex_count; v++) {
@@ -423,10 +399,10 @@ bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lane
         else
             memcpy(o, mesh->positions + 3 * v, 3 * sizeof(float));
         if (!finite3(o)) {
-            lanes_error_set(err, "%s: vertex %zu is not finite%s", what, v,
-                            finite3(mesh->positions + 3 * v) ? " after the transform" : "");
+            status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: vertex %zu is not finite%s", what, v,
+                                     finite3(mesh->positions + 3 * v) ? " after the transform" : "");
             free(tv);
-            return false;
+            return status;
         }
     }
     float *dst = scene->verts + 9 * scene->triangle_count;
@@ -435,10 +411,11 @@ bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lane
         for (int k = 0; k < 3; k++) {
             uint32_t i = mesh->indices[3 * t + k];
             if (i >= mesh->vertex_count) {
-                lanes_error_set(err, "%s: triangle %zu refers to vertex %u of %zu", what, t, i,
-                                mesh->vertex_count);
+                status =
+                    lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: triangle %zu refers to vertex %u of %zu",
+                                    what, t, i, mesh->vertex_count);
                 free(tv);
-                return false;
+                return status;
             }
             memcpy(dst + 9 * t + 3 * k, tv + 3 * (size_t)i, 3 * sizeof(float));
         }
@@ -446,5 +423,5 @@ bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lane
     }
     scene->triangle_count += mesh->triangle_count;
     free(tv);
-    return true;
+    return LANES_OK;
 }

@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 #include "build/accuracy.h"
+#include "build/error.h"
 
 typedef enum lanes_material_kind {
     LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo */
@@ -80,11 +81,6 @@ typedef struct lanes_scene {
     char budget_note[96];
 } lanes_scene;
 
-/* Errors from loaders: which file, which line (0: none), what is wrong. */
-typedef struct lanes_error {
-    char message[512];
-} lanes_error;
-
 /* Triangle indices are uint32_t throughout (material_of, BVH prim_index), and
  * a scene this large would need 72 GiB of vertices anyway. */
 #define LANES_SCENE_MAX_TRIANGLES ((size_t)1 << 31)
@@ -96,14 +92,6 @@ typedef struct lanes_error {
  * `lanes render` of 13.1M triangles, 2.95 GB resident). */
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
 #define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
-
-
-/* Formats err->message like snprintf (truncated to fit). err may be NULL. */
-void lanes_error_set(lanes_error *err, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
 
 /* An empty scene: no arrays, a camera at (0,0,5) looking at the origin, 45
  * degrees, 512x512 (the thesis' image size). */
@@ -121,17 +109,16 @@ void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3]);
  * sizes, refuse more than LANES_SCENE_MAX_TRIANGLES triangles or the
  * scene's triangle_budget (checked at every count, not only when the arrays
  * grow: they grow by doubling), and on failure leave the scene unchanged
- * and return false with a message. */
-bool lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err);
-bool lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
-                              lanes_error *err);
+ * and return an error with a message (LANES_ERR_OUT_OF_MEMORY past the budget). */
+lanes_status lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err);
+lanes_status lanes_scene_add_triangle(lanes_scene *scene, const float v[9], uint32_t material,
+                                      lanes_error *err);
 /* *index (may be NULL) receives the new material's index. Names must be
  * unique within a scene. */
-bool lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
-                              lanes_error *err);
-bool lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l,
-                                 lanes_error *err);
-bool lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err);
+lanes_status lanes_scene_add_material(lanes_scene *scene, const lanes_material *m, uint32_t *index,
+                                      lanes_error *err);
+lanes_status lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l, lanes_error *err);
+lanes_status lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err);
 /* Index of the material called `name`, or -1. */
 long lanes_scene_find_material(const lanes_scene *scene, const char *name);
 
@@ -143,7 +130,7 @@ void lanes_scene_frame_camera(lanes_scene *scene);
  * in range, finite non-negative colors, ior > 0 for glass, a usable camera
  * (finite, eye != target, up not parallel to the view, 0 < fov < 180,
  * positive size). */
-bool lanes_scene_validate(const lanes_scene *scene, lanes_error *err);
+lanes_status lanes_scene_validate(const lanes_scene *scene, lanes_error *err);
 
 /* An indexed triangle mesh, as read from a file or generated, before it is
  * placed in a scene (the same mesh may be placed several times). */
@@ -177,7 +164,7 @@ void lanes_xform_apply(const lanes_xform *x, const float in[3], float out[3]);
  * material `material` (which must exist). Fails on non-finite transformed
  * vertices or out-of-range indices, naming `what` (e.g. the file) in the
  * message; the scene is then unchanged. */
-bool lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
-                          uint32_t material, const char *what, lanes_error *err);
+lanes_status lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, const lanes_xform *xf,
+                                  uint32_t material, const char *what, lanes_error *err);
 
 #endif

@@ -10,6 +10,7 @@
 
 #include "build/memory_limit.h"
 #include "build/mesh_import.h"
+#include "build/mesh_ops.h"
 #include "build/scenes_builtin.h"
 
 #include <cjson/cJSON.h>
@@ -175,13 +176,9 @@ static bool fail(ctx *c, const char *fmt, ...) PRINTF_LIKE(2, 3);
 
 /* "file: line N: json.path: what"; the line is left out when the text does
  * not lead to the path. Always returns false, for `return fail(...)`. */
-static bool fail(ctx *c, const char *fmt, ...)
+static bool fail_status(ctx *c, lanes_status status, const char *what)
 {
-    char what[320], path[160] = "";
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(what, sizeof what, fmt, ap);
-    va_end(ap);
+    char path[160] = "";
     int depth = c->depth < MAX_DEPTH ? c->depth : MAX_DEPTH;
     for (int d = 0; d < depth; d++) {
         size_t l = strlen(path);
@@ -194,8 +191,25 @@ static bool fail(ctx *c, const char *fmt, ...)
     char where[48] = "";
     if (off != SIZE_MAX)
         snprintf(where, sizeof where, "line %lu: ", line_of(c->text, c->len, off));
-    lanes_error_set(c->err, "%s: %s%s%s%s", c->name, where, path, path[0] ? ": " : "", what);
+    lanes_error_set(c->err, status, "%s: %s%s%s%s", c->name, where, path, path[0] ? ": " : "", what);
     return false;
+}
+
+static bool fail(ctx *c, const char *fmt, ...)
+{
+    char what[320];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    return fail_status(c, LANES_ERR_BAD_INPUT, what);
+}
+
+/* A callee's error (a mesh that would not load, a scene out of memory) at
+ * the current place in the file, with the callee's status. */
+static bool fail_from(ctx *c, const lanes_error *sub)
+{
+    return fail_status(c, sub->status, sub->message);
 }
 
 /* ---- typed getters ---- */
@@ -490,8 +504,7 @@ static bool parse_material(ctx *c, const cJSON *m)
             return false;
     }
     lanes_error sub;
-    if (!lanes_scene_add_material(c->s, &mat, NULL, &sub))
-        return fail(c, "%s", sub.message);
+    if (lanes_scene_add_material(c->s, &mat, NULL, &sub) != LANES_OK) return fail_from(c, &sub);
     return true;
 }
 
@@ -648,11 +661,10 @@ static bool parse_object(ctx *c, const cJSON *o)
         }
         if (ok && detail > 4)
             ok = fail(c, "'detail' for a mesh file is Loop subdivision steps: at most 4");
-        if (ok && !lanes_mesh_read(full, &m, &sub))
-            ok = fail(c, "%s", sub.message);
+        if (ok && lanes_mesh_read(full, &m, &sub) != LANES_OK) ok = fail_from(c, &sub);
         for (int i = 0; ok && i < detail; i++) {
             lanes_mesh fine;
-            ok = lanes_mesh_subdivide(&m, &fine, &sub) || fail(c, "%s", sub.message);
+            ok = lanes_mesh_subdivide(&m, &fine, &sub) == LANES_OK || fail_from(c, &sub);
             lanes_mesh_free(&m);
             if (ok)
                 m = fine;
@@ -668,15 +680,15 @@ static bool parse_object(ctx *c, const cJSON *o)
         const char *name = NULL;
         push_key(c, "builtin");
         ok = get_string(c, builtin, &name) &&
-             (lanes_builtin_object(name, detail, &m, &sub) || fail(c, "%s", sub.message));
+             (lanes_builtin_object(name, detail, &m, &sub) == LANES_OK || fail_from(c, &sub));
         pop(c);
     }
     if (!ok)
         return false;
     lanes_xform x;
     lanes_xform_trs(&x, t, &rot, sc);
-    ok = lanes_scene_add_mesh(c->s, &m, &x, (uint32_t)mat, label ? label : "object", &sub) ||
-         fail(c, "%s", sub.message);
+    ok = lanes_scene_add_mesh(c->s, &m, &x, (uint32_t)mat, label ? label : "object", &sub) == LANES_OK ||
+         fail_from(c, &sub);
     lanes_mesh_free(&m);
     return ok;
 }
@@ -721,7 +733,7 @@ static bool parse_light(ctx *c, const cJSON *l)
         pop(c);
         if (!ok)
             return false;
-        return lanes_scene_add_point_light(c->s, &pl, &sub) || fail(c, "%s", sub.message);
+        return lanes_scene_add_point_light(c->s, &pl, &sub) == LANES_OK || fail_from(c, &sub);
     }
     lanes_area_light al;
     const char *vk[3] = {"corner", "edge_u", "edge_v"};
@@ -756,7 +768,7 @@ static bool parse_light(ctx *c, const cJSON *l)
     double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
     if (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0)
         return fail(c, "edge_u and edge_v are zero or parallel: the light has no area");
-    return lanes_scene_add_area_light_quad(c->s, &al, visible, &sub) || fail(c, "%s", sub.message);
+    return lanes_scene_add_area_light_quad(c->s, &al, visible, &sub) == LANES_OK || fail_from(c, &sub);
 }
 
 static bool parse_scene(ctx *c, const cJSON *root)
@@ -849,23 +861,25 @@ static bool parse_scene(ctx *c, const cJSON *root)
         lanes_scene_frame_camera(c->s);
     }
     lanes_error sub;
-    if (!lanes_scene_validate(c->s, &sub))
-        return fail(c, "%s", sub.message);
+    if (lanes_scene_validate(c->s, &sub) != LANES_OK) return fail_from(c, &sub);
     return true;
 }
 
-bool lanes_scene_file_parse(const char *text, size_t len, const char *name, const char *base_dir,
-                            lanes_scene *out, lanes_error *err)
+lanes_status lanes_scene_file_parse(const char *text, size_t len, const char *name, const char *base_dir,
+                                    lanes_scene *out, lanes_error *err)
 {
+    lanes_status status;
+    /* the parser's steps report through err (in ctx), so it must exist */
+    lanes_error local;
+    if (!err) err = &local;
     lanes_scene_init(out);
-    if (!lanes_scene_limit_to_memory(out, err)) return false;
+    if ((status = lanes_scene_limit_to_memory(out, err)) != LANES_OK) return status;
     /* A UTF-8 byte order mark is legal in a file but not to cJSON. */
     size_t skip = len >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;
     ctx c = {name, text + skip, len - skip, base_dir, out, err, {{0}}, 0};
     size_t first = skip_ws(c.text, c.len, 0);
     if (first == c.len) {
-        lanes_error_set(err, "%s: empty file", name);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: empty file", name);
     }
     const char *end = NULL;
     /* Trailing content is checked here rather than by cJSON's
@@ -892,15 +906,14 @@ bool lanes_scene_file_parse(const char *text, size_t len, const char *name, cons
             size_t last = off < c.len ? off : c.len;
             while (last > 0 && c.text[last - 1] != 0 && strchr(" \t\r\n", c.text[last - 1]))
                 last--;
-            lanes_error_set(err,
-                            "%s: line %lu: JSON syntax error: unexpected end of file "
-                            "(truncated?)",
-                            name, line_of(c.text, c.len, last > 0 ? last - 1 : 0));
-        } else {
-            lanes_error_set(err, "%s: line %lu, column %zu: JSON syntax error near '%s'", name,
-                            line_of(c.text, c.len, off), off - bol + 1, near);
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "%s: line %lu: JSON syntax error: unexpected end of file "
+                                   "(truncated?)",
+                                   name, line_of(c.text, c.len, last > 0 ? last - 1 : 0));
         }
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: line %lu, column %zu: JSON syntax error near '%s'", name,
+                               line_of(c.text, c.len, off), off - bol + 1, near);
     }
     const char *slash = strrchr(name, '/');
     snprintf(out->name, sizeof out->name, "%s", slash ? slash + 1 : name);
@@ -911,44 +924,40 @@ bool lanes_scene_file_parse(const char *text, size_t len, const char *name, cons
     cJSON_Delete(root);
     if (!ok)
         lanes_scene_free(out);
-    return ok;
+    return ok ? LANES_OK : err->status;
 }
 
-bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
+lanes_status lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
 {
     lanes_scene_init(out);
     struct stat st;
     if (stat(path, &st) != 0) {
-        lanes_error_set(err, "%s: %s", path, errno == ENOENT ? "no such file" : strerror(errno));
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: %s", path,
+                               errno == ENOENT ? "no such file" : strerror(errno));
     }
     if (S_ISDIR(st.st_mode)) {
-        lanes_error_set(err, "%s: is a directory, not a scene file", path);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: is a directory, not a scene file", path);
     }
     /* fopen of a FIFO blocks until a writer comes: never, for a stray one. */
     if (!S_ISREG(st.st_mode)) {
-        lanes_error_set(err, "%s: not a regular file (a device, FIFO or socket)", path);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: not a regular file (a device, FIFO or socket)",
+                               path);
     }
     if (st.st_size > (off_t)MAX_SCENE_FILE) {
-        lanes_error_set(err,
-                        "%s: %lld bytes: larger than the %u bytes a scene file may have "
-                        "(geometry belongs in mesh files)",
-                        path, (long long)st.st_size, MAX_SCENE_FILE);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: %lld bytes: larger than the %u bytes a scene file may have "
+                               "(geometry belongs in mesh files)",
+                               path, (long long)st.st_size, MAX_SCENE_FILE);
     }
     FILE *f = fopen(path, "rb");
     if (!f) {
-        lanes_error_set(err, "%s: cannot open: %s", path, strerror(errno));
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: cannot open: %s", path, strerror(errno));
     }
     size_t cap = (size_t)st.st_size + 1, len = 0;
     char *text = malloc(cap);
     if (!text) {
         fclose(f);
-        lanes_error_set(err, "%s: out of memory", path);
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     /* Read to the end rather than trusting st_size (a file being written). */
     for (;;) {
@@ -970,8 +979,8 @@ bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
     fclose(f);
     if (rerr || len > MAX_SCENE_FILE) {
         free(text);
-        lanes_error_set(err, "%s: %s", path, rerr ? "read error" : "file too large");
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: %s", path,
+                               rerr ? "read error" : "file too large");
     }
     char dir[4096];
     const char *slash = strrchr(path, '/');
@@ -979,8 +988,7 @@ bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
         size_t n = (size_t)(slash - path);
         if (n >= sizeof dir) {
             free(text);
-            lanes_error_set(err, "%s: path too long", path);
-            return false;
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: path too long", path);
         }
         memcpy(dir, path, n);
         dir[n] = '\0';
@@ -989,7 +997,7 @@ bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err)
     } else {
         strcpy(dir, ".");
     }
-    bool ok = lanes_scene_file_parse(text, len, path, dir, out, err);
+    lanes_status status = lanes_scene_file_parse(text, len, path, dir, out, err);
     free(text);
-    return ok;
+    return status;
 }

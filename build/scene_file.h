@@ -17,12 +17,12 @@
 
 /* Reads the file; relative mesh paths are resolved against its directory.
  * *out is initialized by the call and empty on failure. */
-bool lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err);
+lanes_status lanes_scene_file_load(const char *path, lanes_scene *out, lanes_error *err);
 
 /* The same from text in memory (need not be NUL-terminated). `name` is
  * used in messages; base_dir resolves relative mesh paths (NULL: the
  * current directory). */
-bool lanes_scene_file_parse(const char *text, size_t len, const char *name, const char *base_dir,
-                            lanes_scene *out, lanes_error *err);
+lanes_status lanes_scene_file_parse(const char *text, size_t len, const char *name, const char *base_dir,
+                                    lanes_scene *out, lanes_error *err);
 
 #endif

@@ -24,10 +24,11 @@ static bool ends_with_ci(const char *s, const char *suffix)
     return n >= k && strcasecmp(s + n - k, suffix) == 0;
 }
 
-static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
+static lanes_status mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
 {
+    lanes_status status;
     lanes_scene_init(out);
-    if (!lanes_scene_limit_to_memory(out, err)) return false;
+    if ((status = lanes_scene_limit_to_memory(out, err)) != LANES_OK) return status;
     const char *slash = strrchr(path, '/');
     snprintf(out->name, sizeof out->name, "%s", slash ? slash + 1 : path);
     lanes_material grey;
@@ -38,14 +39,14 @@ static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
     grey.ior = 1.5f;
     uint32_t mat;
     lanes_error why;
-    if (!lanes_scene_add_material(out, &grey, &mat, &why)) {
-        lanes_error_set(err, "%s: %s", path, why.message);
+    if ((status = lanes_scene_add_material(out, &grey, &mat, &why)) != LANES_OK) {
+        lanes_error_set(err, status, "%s: %s", path, why.message);
         lanes_scene_free(out);
-        return false;
+        return status;
     }
-    if (!lanes_mesh_import(out, path, NULL, mat, err)) {
+    if ((status = lanes_mesh_import(out, path, NULL, mat, err)) != LANES_OK) {
         lanes_scene_free(out);
-        return false;
+        return status;
     }
     lanes_scene_frame_camera(out);
     /* A light over the viewer's shoulder, bright enough that the mesh is
@@ -62,24 +63,25 @@ static bool mesh_scene(const char *path, lanes_scene *out, lanes_error *err)
      * in the file. */
     double limit = FLT_MAX / 2.0;
     if (!(1.5 * d2 < limit) || !(fabs(c->eye[0]) + up < limit) || !(fabs(c->eye[1]) + up < limit)) {
-        lanes_error_set(err,
-                        "%s: the mesh is too large to frame (coordinates or extent beyond about "
-                        "1e18): the light's intensity would overflow a float",
-                        path);
+        status = lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                 "%s: the mesh is too large to frame (coordinates or extent beyond about "
+                                 "1e18): the light's intensity would overflow a float",
+                                 path);
         lanes_scene_free(out);
-        return false;
+        return status;
     }
     lanes_point_light l = {{c->eye[0] + (float)up, c->eye[1] + (float)up, c->eye[2]},
                            {(float)(1.5 * d2), (float)(1.5 * d2), (float)(1.5 * d2)}};
-    if (!lanes_scene_add_point_light(out, &l, &why) || !lanes_scene_validate(out, &why)) {
-        lanes_error_set(err, "%s: %s", path, why.message);
+    if ((status = lanes_scene_add_point_light(out, &l, &why)) != LANES_OK ||
+        (status = lanes_scene_validate(out, &why)) != LANES_OK) {
+        lanes_error_set(err, status, "%s: %s", path, why.message);
         lanes_scene_free(out);
-        return false;
+        return status;
     }
-    return true;
+    return LANES_OK;
 }
 
-bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
+lanes_status lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
 {
     if (!spec || !*spec)
         return lanes_builtin_scene("default", out, err);
@@ -94,8 +96,8 @@ bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err)
         if (errno == ENOENT && !strchr(spec, '/') && !strchr(spec, '.'))
             /* A bare word: most likely a mistyped scene name. */
             return lanes_builtin_scene(spec, out, err);
-        lanes_error_set(err, "%s: %s", spec, errno == ENOENT ? "no such file" : strerror(errno));
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: %s", spec,
+                               errno == ENOENT ? "no such file" : strerror(errno));
     }
     return mesh_scene(spec, out, err);
 }

@@ -21,6 +21,6 @@
  * which file, which line where there is one, and what is wrong, including
  * a scene too large to trace in the memory this process may use
  * (lanes_scene_reserve_triangles). */
-bool lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err);
+lanes_status lanes_scene_load(const char *spec, lanes_scene *out, lanes_error *err);
 
 #endif

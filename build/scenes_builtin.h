@@ -21,7 +21,7 @@ typedef struct lanes_builtin_info {
 size_t lanes_builtin_scene_count(void);
 const lanes_builtin_info *lanes_builtin_scene_info(size_t i);
 /* Fills *out (initialized by the call) with the named scene. */
-bool lanes_builtin_scene(const char *name, lanes_scene *out, lanes_error *err);
+lanes_status lanes_builtin_scene(const char *name, lanes_scene *out, lanes_error *err);
 
 /* The fetched meshes: $LANES_MESH_DIR if set and not empty, else the
  * directory configured at build time (<source>/out/meshes by default). */
@@ -36,25 +36,15 @@ bool lanes_builtin_meshes_available(void);
  * "armadillo", "elephant") normalized: centered on the y axis, standing on
  * y = 0, facing +z, largest extent 1. detail: icosphere level / cylinder
  * segments / Loop subdivision steps for meshes; -1 for the default. */
-bool lanes_builtin_object(const char *name, int detail, lanes_mesh *out, lanes_error *err);
+lanes_status lanes_builtin_object(const char *name, int detail, lanes_mesh *out, lanes_error *err);
 /* Names, comma-separated, for messages. */
 const char *lanes_builtin_object_names(void);
-
-/* One step of Loop subdivision (each triangle becomes four, positions
- * smoothed; boundary and non-manifold edges are kept sharp). */
-bool lanes_mesh_subdivide(const lanes_mesh *in, lanes_mesh *out, lanes_error *err);
-/* Vertex clustering on a grid of `cells` cells along the longest axis:
- * a coarse version of a dense mesh (degenerate triangles are dropped). */
-bool lanes_mesh_decimate(const lanes_mesh *in, int cells, lanes_mesh *out, lanes_error *err);
-/* The transform that maps the mesh's bounds to the normalized placement
- * described above (centered in x and z, min y = 0, largest extent 1). */
-void lanes_mesh_normalizing_xform(const lanes_mesh *m, lanes_xform *out);
 
 /* An area light plus, when `visible`, its parallelogram as two triangles
  * with an emissive material of the same emission (so camera and mirror
  * rays see the light; shadow rays toward a point on it must stop short of
  * it). */
-bool lanes_scene_add_area_light_quad(lanes_scene *s, const lanes_area_light *l, bool visible,
-                                     lanes_error *err);
+lanes_status lanes_scene_add_area_light_quad(lanes_scene *s, const lanes_area_light *l, bool visible,
+                                             lanes_error *err);
 
 #endif

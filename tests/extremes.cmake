@@ -5,18 +5,14 @@
 # inactive lanes). Included from tests/CMakeLists.txt.
 #
 #   ctest --test-dir out -R extremes --output-on-failure
-if(TARGET lanes_bvh AND TARGET lanes_scene)
-  add_executable(test_extremes ${CMAKE_CURRENT_LIST_DIR}/test_extremes.c)
-  target_link_libraries(test_extremes PRIVATE lanes_bvh lanes_scene lanes_internal)
-  add_test(NAME extremes COMMAND test_extremes)
-  # The test enumerates the sets itself: a LANES_* variable of whoever runs
-  # ctest must not narrow them.
-  set_tests_properties(extremes PROPERTIES
-    LABELS kernels TIMEOUT 120
-    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
-else()
-  message(STATUS "lanes: no BVH or scene library; the extremes test is not added")
-endif()
+add_executable(test_extremes ${CMAKE_CURRENT_LIST_DIR}/test_extremes.c)
+target_link_libraries(test_extremes PRIVATE lanes_bvh lanes_scene lanes_internal)
+add_test(NAME extremes COMMAND test_extremes)
+# The test enumerates the sets itself: a LANES_* variable of whoever runs
+# ctest must not narrow them.
+set_tests_properties(extremes PROPERTIES
+  LABELS kernels TIMEOUT 120
+  ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 
 # The compiler must round floats where the source says so (see the test).
 add_executable(test_float_narrowing ${CMAKE_CURRENT_LIST_DIR}/test_float_narrowing.c)

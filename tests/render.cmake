@@ -1,33 +1,27 @@
 # Rendering at two kernel sets gives the same image (label "render"):
 # scalar against the best set this CPU runs, PNGs compared with OpenImageIO.
 # Included from tests/CMakeLists.txt.
-if(TARGET lanes_render AND TARGET lanes_image)
-  add_executable(test_render_isa ${CMAKE_CURRENT_LIST_DIR}/test_render_isa.c)
-  target_link_libraries(test_render_isa PRIVATE lanes_render lanes_image)
-  set(lanes_render_dir ${CMAKE_CURRENT_BINARY_DIR}/render_isa)
-  file(MAKE_DIRECTORY ${lanes_render_dir})
-  add_test(NAME render.isa COMMAND test_render_isa ${lanes_render_dir})
-  # The scene plan and the accuracy modes in rendering (test_scene_plan.c).
-  add_executable(test_scene_plan ${CMAKE_CURRENT_LIST_DIR}/test_scene_plan.c)
-  target_link_libraries(test_scene_plan PRIVATE lanes_render)
-  add_test(NAME render.plan COMMAND test_scene_plan ${CMAKE_CURRENT_LIST_DIR}/data)
-  set_tests_properties(render.plan PROPERTIES LABELS render TIMEOUT 300)
-  if(TARGET lanes_cli)
-    # `lanes render --explain` says what the scene needs and where the mode
-    # came from; an unknown mode is a usage error (status 2).
-    add_test(NAME render.explain
-      COMMAND lanes_cli render ${CMAKE_CURRENT_LIST_DIR}/data/scenes/ok/far_robust.json
-              -o ${lanes_render_dir}/explain.png --size 32x32 --explain)
-    set_tests_properties(render.explain PROPERTIES LABELS render TIMEOUT 120
-      PASS_REGULAR_EXPRESSION "shadow rays +on .*specular pass +off .*refraction +off .*accuracy +robust [(]from the scene file[)].*accuracy robust")
-    add_test(NAME render.bad_accuracy
-      COMMAND bash -c "\"$0\" render -o \"$1\" --accuracy exact; test $? -eq 2"
-              $<TARGET_FILE:lanes_cli> ${lanes_render_dir}/bad.png)
-    set_tests_properties(render.bad_accuracy PROPERTIES LABELS render TIMEOUT 60)
-  endif()
-  set_tests_properties(render.isa PROPERTIES
-    LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77
-    ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
-else()
-  message(STATUS "lanes: no renderer or image library; render test not added")
-endif()
+add_executable(test_render_isa ${CMAKE_CURRENT_LIST_DIR}/test_render_isa.c)
+target_link_libraries(test_render_isa PRIVATE lanes_render lanes_image)
+set(lanes_render_dir ${CMAKE_CURRENT_BINARY_DIR}/render_isa)
+file(MAKE_DIRECTORY ${lanes_render_dir})
+add_test(NAME render.isa COMMAND test_render_isa ${lanes_render_dir})
+# The scene plan and the accuracy modes in rendering (test_scene_plan.c).
+add_executable(test_scene_plan ${CMAKE_CURRENT_LIST_DIR}/test_scene_plan.c)
+target_link_libraries(test_scene_plan PRIVATE lanes_render)
+add_test(NAME render.plan COMMAND test_scene_plan ${CMAKE_CURRENT_LIST_DIR}/data)
+set_tests_properties(render.plan PROPERTIES LABELS render TIMEOUT 300)
+# `lanes render --explain` says what the scene needs and where the mode
+# came from; an unknown mode is a usage error (status 2).
+add_test(NAME render.explain
+  COMMAND lanes_cli render ${CMAKE_CURRENT_LIST_DIR}/data/scenes/ok/far_robust.json
+          -o ${lanes_render_dir}/explain.png --size 32x32 --explain)
+set_tests_properties(render.explain PROPERTIES LABELS render TIMEOUT 120
+  PASS_REGULAR_EXPRESSION "shadow rays +on .*specular pass +off .*refraction +off .*accuracy +robust [(]from the scene file[)].*accuracy robust")
+add_test(NAME render.bad_accuracy
+  COMMAND bash -c "\"$0\" render -o \"$1\" --accuracy exact; test $? -eq 2"
+          $<TARGET_FILE:lanes_cli> ${lanes_render_dir}/bad.png)
+set_tests_properties(render.bad_accuracy PROPERTIES LABELS render TIMEOUT 60)
+set_tests_properties(render.isa PROPERTIES
+  LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77
+  ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")

@@ -1,10 +1,5 @@
 # Scene input: container, mesh import, scene files, built-in scenes and the
 # malformed-input corpus (label "scenes"). Included from tests/CMakeLists.txt.
-if(NOT TARGET lanes_scene)
-  message(STATUS "lanes: no lanes_scene library; scene tests not added")
-  return()
-endif()
-
 add_executable(test_scenes ${CMAKE_CURRENT_LIST_DIR}/test_scenes.c)
 target_link_libraries(test_scenes PRIVATE lanes_scene)
 

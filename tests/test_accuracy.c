@@ -31,20 +31,9 @@
 #include "build/parallel.h"
 #include "build/scenes_builtin.h"
 #include "simd/isa.h"
+#include "tests/harness.h"
 
 #define SKIP 77
-
-static int failures;
-
-#define CHECK(cond, ...)                                                                                             \
-    do {                                                                                                             \
-        if (!(cond)) {                                                                                               \
-            failures++;                                                                                              \
-            printf("FAIL %s:%d: ", __FILE__, __LINE__);                                                              \
-            printf(__VA_ARGS__);                                                                                     \
-            printf("\n");                                                                                            \
-        }                                                                                                            \
-    } while (0)
 
 static double now(void)
 {
@@ -55,14 +44,8 @@ static double now(void)
 
 /* ---- the reference ---------------------------------------------------- */
 
-static uint64_t rng_state = 0x2545F4914F6CDD1Dull;
-static uint64_t rng(void)
-{
-    uint64_t z = (rng_state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
+static harness_rng rng_state = {0x2545F4914F6CDD1Dull};
+static uint64_t rng(void) { return harness_next(&rng_state); }
 static int64_t rint_in(int64_t lo, int64_t hi) { return lo + (int64_t)(rng() % (uint64_t)(hi - lo + 1)); }
 
 typedef __int128 i128;
@@ -230,39 +213,43 @@ static void test_closed(void)
     lanes_mesh m;
     lanes_error err;
     char note[320];
-    CHECK(acc_mesh_load("sphere", false, &m, note, sizeof note, &err), "sphere: %s", err.message);
+    CHECK(acc_mesh_load("sphere", false, &m, note, sizeof note, &err) == LANES_OK, "sphere: %s", err.message);
     if (m.triangle_count) CHECK(note[0] == '\0', "sphere: unexpected note '%s'", note);
     lanes_mesh_free(&m);
     if (lanes_builtin_meshes_available()) {
-        CHECK(acc_mesh_load("bunny", false, &m, note, sizeof note, &err), "bunny: %s", err.message);
+        CHECK(acc_mesh_load("bunny", false, &m, note, sizeof note, &err) == LANES_OK, "bunny: %s",
+              err.message);
         lanes_mesh_free(&m);
-        CHECK(acc_mesh_load("dragon", false, &m, note, sizeof note, &err), "dragon: %s", err.message);
+        CHECK(acc_mesh_load("dragon", false, &m, note, sizeof note, &err) == LANES_OK, "dragon: %s",
+              err.message);
         CHECK(strstr(note, "filling") != NULL, "dragon: the hole filling is not reported ('%s')", note);
         printf("closed: %s\n", note);
         acc_closure c;
-        CHECK(acc_mesh_closure(&m, &c, &err) && acc_closure_closed(&c), "dragon: not closed after filling");
+        CHECK(acc_mesh_closure(&m, &c, &err) == LANES_OK && acc_closure_closed(&c),
+              "dragon: not closed after filling");
         lanes_mesh_free(&m);
     } else {
         printf("closed: meshes not fetched; bunny and dragon not checked\n");
     }
     /* one triangle removed from the sphere: three boundary edges */
-    CHECK(acc_mesh_load("sphere", false, &m, NULL, 0, &err), "sphere: %s", err.message);
+    CHECK(acc_mesh_load("sphere", false, &m, NULL, 0, &err) == LANES_OK, "sphere: %s", err.message);
     m.triangle_count--;
     acc_closure c;
-    CHECK(acc_mesh_closure(&m, &c, &err) && c.boundary == 3 && !acc_closure_closed(&c),
+    CHECK(acc_mesh_closure(&m, &c, &err) == LANES_OK && c.boundary == 3 && !acc_closure_closed(&c),
           "a sphere without one triangle: %zu boundary edges", c.boundary);
     /* flipping a triangle makes its three edges run the same way as their neighbours' */
     m.triangle_count++;
     uint32_t s = m.indices[0];
     m.indices[0] = m.indices[1], m.indices[1] = s;
-    CHECK(acc_mesh_closure(&m, &c, &err) && c.misoriented == 3 && !acc_closure_closed(&c),
+    CHECK(acc_mesh_closure(&m, &c, &err) == LANES_OK && c.misoriented == 3 && !acc_closure_closed(&c),
           "a sphere with one flipped triangle: %zu misoriented edges", c.misoriented);
     char what[256];
     acc_closure_describe(&c, what, sizeof what);
     printf("closed: a flipped triangle: %s\n", what);
     lanes_mesh_free(&m);
     /* the plane is open and too open to fill */
-    CHECK(!acc_mesh_load("plane", false, &m, NULL, 0, &err) && strstr(err.message, "not a closed mesh"),
+    CHECK(acc_mesh_load("plane", false, &m, NULL, 0, &err) != LANES_OK &&
+              strstr(err.message, "not a closed mesh"),
           "plane accepted as closed (%s)", err.message);
     printf("closed: plane refused: %s\n", err.message);
 }
@@ -325,7 +312,7 @@ static int test_leaks(const char *mesh_name, uint64_t rays, int threads)
         printf("SKIP: %s: the CGAL meshes are not fetched (cmake/fetch_meshes.sh)\n", mesh_name);
         return SKIP;
     }
-    if (!acc_mesh_load(mesh_name, false, &mesh, NULL, 0, &err)) {
+    if (acc_mesh_load(mesh_name, false, &mesh, NULL, 0, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         return 1;
     }
@@ -345,9 +332,9 @@ static int test_leaks(const char *mesh_name, uint64_t rays, int threads)
            "count", "leaks", "bound");
     for (size_t t = 0; t < sizeof translations / sizeof translations[0]; t++) {
         acc_world w;
-        if (!acc_world_build(&w, mesh_name, &mesh, ACC_DEFAULT_SIZE, translations[t], widths, threads, 1, &err)) {
-            printf("FAIL: %s\n", err.message);
-            failures++;
+        if (acc_world_build(&w, mesh_name, &mesh, ACC_DEFAULT_SIZE, translations[t], widths, threads, 1,
+                            &err) != LANES_OK) {
+            harness_fail("%s", err.message);
             continue;
         }
         CHECK(w.point_count == ACC_POINTS, "%s at %g: %zu interior points of %d", mesh_name, translations[t],
@@ -380,9 +367,8 @@ static int test_leaks(const char *mesh_name, uint64_t rays, int threads)
                 memset(&c, 0, sizeof c);
                 acc_job job = {.k = k, .mode = runs[r].mode, .via = runs[r].via, .first = 0, .count = runs[r].rays,
                                .aimed = runs[r].aimed, .threads = threads};
-                if (!acc_measure(&w, &job, &c, &err)) {
-                    printf("FAIL: %s\n", err.message);
-                    failures++;
+                if (acc_measure(&w, &job, &c, &err) != LANES_OK) {
+                    harness_fail("%s", err.message);
                     continue;
                 }
                 uint64_t bound = runs[r].mode == LANES_ACCURACY_ROBUST
@@ -444,6 +430,6 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: test_accuracy reference | closed | leaks MESH [--rays N] [--threads N]\n");
         return 2;
     }
-    printf("%s in %.1f s on %d threads: %s\n", what, now() - t0, lanes_parallel_threads(0), failures ? "FAILED" : "passed");
-    return failures ? 1 : 0;
+    printf("%s in %.1f s on %d threads\n", what, now() - t0, lanes_parallel_threads(0));
+    return harness_summary("test_accuracy");
 }

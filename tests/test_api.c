@@ -7,7 +7,10 @@
  *
  *   test_api [--expect-refused SET]   (SET must be refused as the CPU lacking it)
  */
+#define _POSIX_C_SOURCE 200809L /* setenv */
 #include <lanes/lanes.h>
+
+#include "harness.h" /* beside this file: the test sees no other lanes header */
 
 #include <math.h>
 #include <pthread.h>
@@ -15,29 +18,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-static long passed, failed;
-
-#define CHECK(cond, ...)                                                                   \
-    do {                                                                                   \
-        if (cond) {                                                                        \
-            passed++;                                                                      \
-        } else {                                                                           \
-            failed++;                                                                      \
-            printf("FAIL %s:%d: ", __FILE__, __LINE__);                                    \
-            printf(__VA_ARGS__);                                                           \
-            printf("\n");                                                                  \
-        }                                                                                  \
-    } while (0)
-
 static const char *const modes[] = {"fast", "default", "robust"};
 
 /* ------------------------------------------------------------- scene */
 
-static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
+static harness_rng rng = {0x9e3779b97f4a7c15ull};
 static double rnd(void) /* [0, 1) */
 {
-    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
-    return (double)(rng_state >> 11) * 0x1p-53;
+    return harness_uniform(&rng);
 }
 
 typedef struct mesh {
@@ -289,6 +277,16 @@ static void test_argument_errors(const mesh *m)
                  "vertex index", "index out of range");
     expect_error(lanes_accel_create(NULL, m->v, m->nv, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT, "device", "NULL device");
     CHECK(callback_calls == 4, "callback calls %d, want 4 (not for a NULL device)", callback_calls);
+
+    /* The status comes from where the failure was found: an accel that
+     * cannot fit is out of memory, a limit that is no size is bad input. */
+    setenv("LANES_MEMORY_LIMIT", "1K", 1);
+    expect_error(lanes_accel_create(d, m->v, m->nv, m->idx, m->nt, &a), LANES_ERR_OUT_OF_MEMORY,
+                 "LANES_MEMORY_LIMIT allows", "accel over LANES_MEMORY_LIMIT=1K");
+    setenv("LANES_MEMORY_LIMIT", "lots", 1);
+    expect_error(lanes_accel_create(d, m->v, m->nv, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT,
+                 "'lots' is not a size", "LANES_MEMORY_LIMIT=lots");
+    unsetenv("LANES_MEMORY_LIMIT");
 
     /* A triangle with a NaN vertex is left out and never hit. */
     float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -544,7 +542,7 @@ static void test_threads(const mesh *m)
               w[i].packets ? "packets" : "stream", diff);
         free_results(&w[i].out);
     }
-    printf("%d threads queried one accel at once: %s\n", THREADS, failed ? "see above" : "same results");
+    printf("%d threads queried one accel at once: %s\n", THREADS, harness.failures ? "see above" : "same results");
     /* Accels keep their device: releasing the device first is allowed. */
     lanes_device_release(d);
     CHECK(lanes_intersect_stream(a, &s, 16, &h) == LANES_OK, "query after the device's release");
@@ -566,6 +564,5 @@ int main(int argc, char **argv)
     test_threads(&m);
     free(m.v);
     free(m.idx);
-    printf("%ld passed, %ld failed\n", passed, failed);
-    return failed ? 1 : 0;
+    return harness_summary("test_api");
 }

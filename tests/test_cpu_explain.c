@@ -8,8 +8,8 @@
 #include <string.h>
 
 #include "simd/isa.h"
+#include "tests/harness.h"
 
-static int failures, checks;
 
 #define YMM (LANES_CPU_AVX | LANES_CPU_F16C | LANES_CPU_FMA | LANES_CPU_AVX2)
 #define ZMM                                                                                 \
@@ -38,12 +38,9 @@ static void expect(const char *what, const lanes_cpu_features *cpu, lanes_isa is
     char why[256];
     bool missing = lanes_cpu_explain_missing(cpu, lanes_isa_required_features(isa), why,
                                              sizeof why);
-    checks++;
-    if (!want ? missing : (!missing || strcmp(why, want) != 0)) {
-        failures++;
-        printf("FAIL %s, %s: got \"%s\", want \"%s\"\n", what, lanes_isa_name(isa),
-               missing ? why : "(nothing missing)", want ? want : "(nothing missing)");
-    } else {
+    bool ok = !want ? !missing : (missing && strcmp(why, want) == 0);
+    if (CHECK(ok, "%s, %s: got \"%s\", want \"%s\"", what, lanes_isa_name(isa),
+              missing ? why : "(nothing missing)", want ? want : "(nothing missing)")) {
         printf("PASS %s, %s: %s\n", what, lanes_isa_name(isa), want ? want : "runs");
     }
 }
@@ -108,16 +105,10 @@ int main(void)
     /* A reason longer than the buffer is cut, not overrun. */
     char small[12];
     memset(small, 'x', sizeof small);
-    checks++;
-    if (!lanes_cpu_explain_missing(&zen3, lanes_isa_required_features(LANES_ISA_AVX512), small,
-                                   sizeof small) ||
-        strlen(small) != sizeof small - 1) {
-        failures++;
-        printf("FAIL a short buffer: the reason is not cut to fit\n");
-    } else {
-        printf("PASS a short buffer holds \"%s\"\n", small);
-    }
+    bool cut = lanes_cpu_explain_missing(&zen3, lanes_isa_required_features(LANES_ISA_AVX512), small,
+                                         sizeof small) &&
+               strlen(small) == sizeof small - 1;
+    if (CHECK(cut, "a short buffer: the reason is not cut to fit")) printf("PASS a short buffer holds \"%s\"\n", small);
 
-    printf("%d passed, %d failed\n", checks - failures, failures);
-    return failures ? 1 : 0;
+    return harness_summary("test_cpu_explain");
 }

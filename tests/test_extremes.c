@@ -1257,7 +1257,7 @@ static bool build_tiny(const tri_case *tc, const tri_geom *g, tiny_scene *s)
         memcpy(v, t[i]->v0, sizeof t[i]->v0);
         memcpy(v + 3, t[i]->v1, sizeof t[i]->v1);
         memcpy(v + 6, t[i]->v2, sizeof t[i]->v2);
-        if (!lanes_scene_add_triangle(&sc, v, 0, &err)) {
+        if (lanes_scene_add_triangle(&sc, v, 0, &err) != LANES_OK) {
             printf("FAIL: %s: cannot add a triangle: %s\n", tc->name, err.message);
             lanes_scene_free(&sc);
             return false;
@@ -1268,13 +1268,13 @@ static bool build_tiny(const tri_case *tc, const tri_geom *g, tiny_scene *s)
         lanes_bvh_default_options(&bo);
         bo.max_leaf_size = leaf_sizes[l];
         bo.threads = 1;
-        if (!lanes_bvh2_build(&sc, &bo, &s->bvh[l], &err)) {
+        if (lanes_bvh2_build(&sc, &bo, &s->bvh[l], &err) != LANES_OK) {
             printf("FAIL: %s: BVH2: %s\n", tc->name, err.message);
             lanes_scene_free(&sc);
             return false;
         }
         for (int w = 0; w < 3; w++)
-            if (!lanes_wbvh_from_bvh2(&s->bvh[l], 4 << w, &s->wide[l][w], &err)) {
+            if (lanes_wbvh_from_bvh2(&s->bvh[l], 4 << w, &s->wide[l][w], &err) != LANES_OK) {
                 printf("FAIL: %s: %d-wide BVH: %s\n", tc->name, 4 << w, err.message);
                 lanes_scene_free(&sc);
                 return false;

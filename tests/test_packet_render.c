@@ -22,15 +22,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int passed, failed, skipped;
+#include "tests/harness.h"
 
+/* Every check is printed, passed or not: the log reads as the list of what
+ * was compared. */
 static void check(bool ok, const char *what)
 {
-    if (ok)
-        passed++;
-    else
-        failed++;
-    printf("%s: %s\n", ok ? "ok" : "FAIL", what);
+    if (CHECK(ok, "%s", what)) printf("ok: %s\n", what);
 }
 
 static lanes_isa isa_of_lanes(int lanes)
@@ -60,7 +58,7 @@ static void same_image_at(const lanes_scene *scene, const lanes_kernels *k, cons
     ro.accuracy = mode;
     ro.width = ro.height = 96;
     lanes_render_result single;
-    if (!lanes_render(scene, accel, &ro, &single, &err)) {
+    if (lanes_render(scene, accel, &ro, &single, &err) != LANES_OK) {
         check(false, err.message);
         return;
     }
@@ -74,7 +72,7 @@ static void same_image_at(const lanes_scene *scene, const lanes_kernels *k, cons
             po.queue_min = 64;
             static lanes_packet_metrics m;
             lanes_render_result r;
-            if (!lanes_packet_render(scene, accel, &po, &r, &m, &err)) {
+            if (lanes_packet_render(scene, accel, &po, &r, &m, &err) != LANES_OK) {
                 check(false, err.message);
                 continue;
             }
@@ -114,12 +112,12 @@ static void same_image(const lanes_scene *scene)
         lanes_isa isa = (lanes_isa)i;
         if (!lanes_isa_supported(isa)) {
             printf("SKIP %s: not runnable here\n", lanes_isa_name(isa));
-            skipped++;
+            harness_skip();
             continue;
         }
         const lanes_kernels *k = lanes_kernels_for(isa);
         lanes_render_accel accel;
-        if (!lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err)) {
+        if (lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err) != LANES_OK) {
             check(false, err.message);
             return;
         }
@@ -146,7 +144,7 @@ static double utilisation(const lanes_scene *scene, const lanes_render_accel *ac
     static lanes_packet_metrics m;
     lanes_render_result r;
     lanes_error err;
-    if (!lanes_packet_render(scene, accel, &po, &r, &m, &err)) {
+    if (lanes_packet_render(scene, accel, &po, &r, &m, &err) != LANES_OK) {
         printf("render failed: %s\n", err.message);
         return NAN;
     }
@@ -160,12 +158,12 @@ static double utilisation(const lanes_scene *scene, const lanes_render_accel *ac
 static bool load(const char *name, lanes_scene *scene, lanes_render_accel *accel)
 {
     lanes_error err;
-    if (!lanes_scene_load(name, scene, &err)) {
+    if (lanes_scene_load(name, scene, &err) != LANES_OK) {
         printf("SKIP %s: %s\n", name, err.message);
-        skipped++;
+        harness_skip();
         return false;
     }
-    if (!lanes_render_accel_build(scene, 0, 0, accel, &err)) {
+    if (lanes_render_accel_build(scene, 0, 0, accel, &err) != LANES_OK) {
         check(false, err.message);
         lanes_scene_free(scene);
         return false;
@@ -181,7 +179,7 @@ static void degradation(const char *name)
     lanes_isa w4 = isa_of_lanes(4), w8 = isa_of_lanes(8), w16 = isa_of_lanes(16);
     if (w4 == LANES_ISA_NONE || w8 == LANES_ISA_NONE || w16 == LANES_ISA_NONE) {
         printf("SKIP %s: needs sets of 4, 8 and 16 lanes\n", name);
-        skipped++;
+        harness_skip();
     } else {
         double t4, t8, t16;
         double u4 = utilisation(&scene, &accel, w4, LANES_RAYS_SPECULAR, LANES_QUEUE_MAX, 128, &t4);
@@ -214,7 +212,7 @@ int main(void)
 {
     lanes_scene scene;
     lanes_error err;
-    if (!lanes_scene_load("default", &scene, &err)) {
+    if (lanes_scene_load("default", &scene, &err) != LANES_OK) {
         printf("FAIL: default scene: %s\n", err.message);
         return 1;
     }
@@ -239,6 +237,5 @@ int main(void)
         lanes_render_accel_free(&accel);
         lanes_scene_free(&scene);
     }
-    printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
-    return failed ? 1 : 0;
+    return harness_summary("test_packet_render");
 }

@@ -10,26 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int failures, checks;
+#include "tests/harness.h"
 
-#define CHECK(cond, ...)                                                                   \
-    do {                                                                                   \
-        checks++;                                                                          \
-        if (!(cond)) {                                                                     \
-            failures++;                                                                    \
-            if (failures < 30) {                                                           \
-                printf("FAIL %s:%d: ", __FILE__, __LINE__);                                \
-                printf(__VA_ARGS__);                                                       \
-                printf("\n");                                                              \
-            }                                                                              \
-        }                                                                                  \
-    } while (0)
-
-static uint64_t rng_state = 0x243F6A8885A308D3ull;
+static harness_rng rng = {0x243F6A8885A308D3ull};
 static float frand(void)
 {
-    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
-    return (float)(rng_state >> 40) * 0x1p-24f;
+    return (float)(harness_next(&rng) >> 40) * 0x1p-24f;
 }
 
 static void add_tri(lanes_scene *s, size_t *cap, const float v[9])
@@ -170,7 +156,7 @@ int main(void)
     lanes_bvh_default_options(&bo);
     lanes_bvh2 bvh;
     lanes_error err;
-    if (!lanes_bvh2_build(&scene, &bo, &bvh, &err)) {
+    if (lanes_bvh2_build(&scene, &bo, &bvh, &err) != LANES_OK) {
         printf("FAIL: BVH build: %s\n", err.message);
         return 1;
     }
@@ -184,13 +170,11 @@ int main(void)
     static float u[LANES_PACKET_MAX_RAYS + 16], v[LANES_PACKET_MAX_RAYS + 16];
     static uint8_t occ[LANES_PACKET_MAX_RAYS + 16], ref_occ[LANES_PACKET_MAX_RAYS];
     static lanes_hit ref_hit[LANES_PACKET_MAX_RAYS];
-    int skipped = 0;
-
     for (int isa = 0; isa < LANES_ISA_COUNT; isa++) {
         const lanes_kernels *k = lanes_kernels_for((lanes_isa)isa);
         if (!k || !lanes_isa_supported((lanes_isa)isa)) {
             printf("SKIP %s: not compiled in or not runnable on this CPU\n", lanes_isa_name((lanes_isa)isa));
-            skipped++;
+            harness_skip();
             continue;
         }
         /* default and robust modes: their rays carry exact reciprocals, as
@@ -280,6 +264,5 @@ int main(void)
     lanes_bvh2_free(&bvh);
     free(scene.verts);
     free(scene.material_of);
-    printf("%d passed, %d failed, %d skipped\n", checks - failures, failures, skipped);
-    return failures ? 1 : 0;
+    return harness_summary("test_packets");
 }

@@ -55,20 +55,19 @@ static bool render_with(const lanes_scene *scene, lanes_isa isa, int size, const
     memset(&err, 0, sizeof err);
     const lanes_kernels *k = lanes_kernels_for(isa);
     lanes_render_accel accel;
-    if (!lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err)) {
+    if (lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err) != LANES_OK) {
         printf("FAIL: acceleration structure for %s: %s\n", k->name, err.message);
         return false;
     }
     lanes_render_options opt = wide_options(isa, size);
-    bool ok = lanes_render(scene, &accel, &opt, res, &err);
+    bool ok = lanes_render(scene, &accel, &opt, res, &err) == LANES_OK;
     lanes_render_accel_free(&accel);
     if (!ok) {
         printf("FAIL: render with %s: %s\n", k->name, err.message);
         return false;
     }
-    char why[512];
-    if (!lanes_image_write(path, res->width, res->height, res->rgb, why, sizeof why)) {
-        printf("FAIL: writing %s: %s\n", path, why);
+    if (lanes_image_write(path, res->width, res->height, res->rgb, &err) != LANES_OK) {
+        printf("FAIL: writing %s: %s\n", path, err.message);
         return false;
     }
     printf("%-10s %dx%d, %llu rays in %.3f s -> %s\n", k->name, res->width, res->height,
@@ -104,7 +103,7 @@ int main(int argc, char **argv)
     lanes_error err;
     memset(&err, 0, sizeof err);
     lanes_scene_init(&scene);
-    if (!lanes_scene_load("default", &scene, &err)) {
+    if (lanes_scene_load("default", &scene, &err) != LANES_OK) {
         printf("FAIL: default scene: %s\n", err.message);
         return 1;
     }
@@ -132,9 +131,8 @@ int main(int argc, char **argv)
                (unsigned long long)ra.rays, (unsigned long long)rb.rays);
 
     lanes_image_diff d;
-    char why[512];
-    if (!lanes_image_compare(pa, pb, THRESHOLD, &d, why, sizeof why)) {
-        printf("FAIL: comparing: %s\n", why);
+    if (lanes_image_compare(pa, pb, THRESHOLD, &d, &err) != LANES_OK) {
+        printf("FAIL: comparing: %s\n", err.message);
         return 1;
     }
     long long allowed = (long long)(MAX_FRACTION_OVER * (double)d.pixels);
@@ -172,7 +170,7 @@ int main(int argc, char **argv)
         lanes_render_result rp;
         lanes_render_accel none;
         memset(&none, 0, sizeof none);
-        bool ok = st == LANES_OK && lanes_render(&scene, &none, &opt, &rp, &err);
+        bool ok = st == LANES_OK && lanes_render(&scene, &none, &opt, &rp, &err) == LANES_OK;
         bool same = ok && rp.rays == rb.rays && memcmp(rp.rgb, rb.rgb, n * 3 * sizeof(float)) == 0;
         printf("%s through the public API vs the kernel table: %s (trace %.3f s vs %.3f s; timing "
                "is reported, not tested)\n",

@@ -28,19 +28,7 @@
 #include "trace/packet_render.h"
 #include "trace/render.h"
 #include "trace/scene_plan.h"
-
-static int failures, checks;
-
-#define CHECK(cond, ...)                                                                 \
-    do {                                                                                 \
-        checks++;                                                                        \
-        if (!(cond)) {                                                                   \
-            failures++;                                                                  \
-            printf("FAIL %s:%d: ", __FILE__, __LINE__);                                  \
-            printf(__VA_ARGS__);                                                         \
-            printf("\n");                                                                \
-        }                                                                                \
-    } while (0)
+#include "tests/harness.h"
 
 /* A unit icosphere of one material kind at `offset` on every axis, with
  * `lights` point lights above it. */
@@ -60,12 +48,13 @@ static bool sphere_scene(lanes_scene *s, lanes_material_kind kind, int lights, d
     lanes_xform x;
     const double t[3] = {offset, offset, offset}, one[3] = {1, 1, 1};
     lanes_xform_trs(&x, t, NULL, one);
-    bool ok = lanes_builtin_object("sphere", 3, &m, &err) && lanes_scene_add_material(s, &mat, &id, &err) &&
-              lanes_scene_add_mesh(s, &m, &x, id, "sphere", &err);
+    bool ok = lanes_builtin_object("sphere", 3, &m, &err) == LANES_OK &&
+              lanes_scene_add_material(s, &mat, &id, &err) == LANES_OK &&
+              lanes_scene_add_mesh(s, &m, &x, id, "sphere", &err) == LANES_OK;
     lanes_mesh_free(&m);
     for (int i = 0; ok && i < lights; i++) {
         lanes_point_light l = {{(float)offset, (float)offset + 5.0f, (float)offset + 5.0f}, {100, 100, 100}};
-        ok = lanes_scene_add_point_light(s, &l, &err);
+        ok = lanes_scene_add_point_light(s, &l, &err) == LANES_OK;
     }
     if (!ok) printf("FAIL: building the sphere scene: %s\n", err.message);
     lanes_scene_frame_camera(s);
@@ -88,7 +77,7 @@ static void decisions(void)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         lanes_scene s;
         if (!sphere_scene(&s, cases[i].kind, cases[i].lights, 0.0)) {
-            failures++;
+            harness_fail("the sphere scene did not build (see above)");
             continue;
         }
         lanes_scene_plan p;
@@ -107,7 +96,7 @@ static void decisions(void)
     }
     lanes_scene s;
     lanes_error err;
-    if (lanes_scene_load("default", &s, &err)) {
+    if (lanes_scene_load("default", &s, &err) == LANES_OK) {
         lanes_scene_plan p;
         lanes_scene_plan_make(&s, -1, &p);
         CHECK(p.shadow_rays && p.specular_pass && p.refraction && p.hit_geometry && !p.recommend_robust,
@@ -129,7 +118,7 @@ static void recommendation(void)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         lanes_scene s;
         if (!sphere_scene(&s, LANES_MAT_DIFFUSE, 1, cases[i].offset)) {
-            failures++;
+            harness_fail("the sphere scene did not build (see above)");
             continue;
         }
         lanes_scene_plan p;
@@ -150,7 +139,7 @@ static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool pack
     const lanes_kernels *k = lanes_kernels_current();
     lanes_render_accel a;
     lanes_error err;
-    if (!lanes_render_accel_build(s, k->wide_width, 0, &a, &err)) {
+    if (lanes_render_accel_build(s, k->wide_width, 0, &a, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         return NAN;
     }
@@ -166,7 +155,8 @@ static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool pack
     po.base = o;
     lanes_render_result r;
     double sum = NAN;
-    if (packets ? lanes_packet_render(s, &a, &po, &r, NULL, &err) : lanes_render(s, &a, &o, &r, &err)) {
+    if (packets ? lanes_packet_render(s, &a, &po, &r, NULL, &err) == LANES_OK
+                : lanes_render(s, &a, &o, &r, &err) == LANES_OK) {
         sum = 0.0;
         for (size_t i = 0; i < (size_t)r.width * (size_t)r.height * 3; i++) sum += r.rgb[i];
         sum /= (double)r.width * (double)r.height * 3.0;
@@ -184,7 +174,7 @@ static void far_scene(const char *data_dir)
     snprintf(path, sizeof path, "%s/scenes/ok/far_robust.json", data_dir);
     lanes_scene far;
     lanes_error err;
-    if (!lanes_scene_load(path, &far, &err)) {
+    if (lanes_scene_load(path, &far, &err) != LANES_OK) {
         CHECK(false, "%s", err.message);
         return;
     }
@@ -199,7 +189,7 @@ static void far_scene(const char *data_dir)
 
     /* the same scene moved to the origin: the reference image */
     lanes_scene near;
-    if (!lanes_scene_load(path, &near, &err)) {
+    if (lanes_scene_load(path, &near, &err) != LANES_OK) {
         CHECK(false, "%s", err.message);
         lanes_scene_free(&far);
         return;
@@ -234,14 +224,14 @@ static void no_geometry_needed(void)
 {
     lanes_scene s;
     if (!sphere_scene(&s, LANES_MAT_DIFFUSE, 0, 0.0)) {
-        failures++;
+        harness_fail("the sphere scene did not build (see above)");
         return;
     }
     /* sphere_scene framed the camera on the sphere: the centre pixel hits it */
     const lanes_kernels *k = lanes_kernels_current();
     lanes_render_accel a;
     lanes_error err;
-    if (!lanes_render_accel_build(&s, k->wide_width, 0, &a, &err)) {
+    if (lanes_render_accel_build(&s, k->wide_width, 0, &a, &err) != LANES_OK) {
         CHECK(false, "%s", err.message);
         lanes_scene_free(&s);
         return;
@@ -250,7 +240,7 @@ static void no_geometry_needed(void)
     lanes_render_default_options(&o);
     o.width = o.height = 33;
     lanes_render_result r;
-    if (lanes_render(&s, &a, &o, &r, &err)) {
+    if (lanes_render(&s, &a, &o, &r, &err) == LANES_OK) {
         const float *c = r.rgb + (16 * 33 + 16) * 3;
         CHECK(c[0] == 0.5f * 0.03f && r.shadow_rays == 0,
               "unlit diffuse sphere: centre pixel %.6g, expected the ambient 0.5 * 0.03; %llu shadow rays",
@@ -260,7 +250,7 @@ static void no_geometry_needed(void)
         CHECK(false, "%s", err.message);
     }
     o.accuracy = (lanes_accuracy)LANES_ACCURACY_COUNT;
-    bool rendered = lanes_render(&s, &a, &o, &r, &err);
+    bool rendered = lanes_render(&s, &a, &o, &r, &err) == LANES_OK;
     CHECK(!rendered && strstr(err.message, "accuracy mode"), "an unknown accuracy mode: %s",
           rendered ? "rendered" : err.message);
     if (rendered) lanes_render_result_free(&r);
@@ -278,6 +268,5 @@ int main(int argc, char **argv)
     recommendation();
     no_geometry_needed();
     far_scene(argv[1]);
-    printf("%d checks, %d failed\n", checks, failures);
-    return failures ? 1 : 0;
+    return harness_summary("test_scene_plan");
 }

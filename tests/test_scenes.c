@@ -17,7 +17,6 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,29 +25,14 @@
 
 #include "build/memory_limit.h"
 #include "build/mesh_import.h"
+#include "build/mesh_ops.h"
 #include "build/scene.h"
 #include "build/scene_file.h"
 #include "build/scene_load.h"
 #include "build/scenes_builtin.h"
+#include "tests/harness.h"
 
-static int g_failures;
 static const char *g_data, *g_scratch;
-
-#define CHECK(cond, ...) check_((cond), __LINE__, #cond, __VA_ARGS__)
-
-static bool check_(bool ok, int line, const char *expr, const char *fmt, ...)
-{
-    if (ok)
-        return true;
-    va_list ap;
-    va_start(ap, fmt);
-    fprintf(stderr, "FAIL test_scenes.c:%d: %s: ", line, expr);
-    vfprintf(stderr, fmt, ap);
-    fprintf(stderr, "\n");
-    va_end(ap);
-    g_failures++;
-    return false;
-}
 
 static double now(void)
 {
@@ -138,17 +122,17 @@ static void test_container(void)
     memset(&m, 0, sizeof m);
     strcpy(m.name, "a");
     uint32_t ia, ib;
-    CHECK(lanes_scene_add_material(&s, &m, &ia, &err) && ia == 0, "first material");
-    CHECK(!lanes_scene_add_material(&s, &m, &ib, &err) && strstr(err.message, "twice"),
+    CHECK(lanes_scene_add_material(&s, &m, &ia, &err) == LANES_OK && ia == 0, "first material");
+    CHECK(lanes_scene_add_material(&s, &m, &ib, &err) != LANES_OK && strstr(err.message, "twice"),
           "duplicate name refused: %s", err.message);
     strcpy(m.name, "b");
     m.kind = LANES_MAT_GLASS;
     m.ior = 1.5f;
-    CHECK(lanes_scene_add_material(&s, &m, &ib, &err) && ib == 1, "second material");
+    CHECK(lanes_scene_add_material(&s, &m, &ib, &err) == LANES_OK && ib == 1, "second material");
     /* Growth across many reallocations keeps every triangle. */
     for (int i = 0; i < 100000; i++) {
         float v[9] = {(float)i, 0, 0, (float)i + 1, 0, 0, (float)i, 1, 0};
-        if (!lanes_scene_add_triangle(&s, v, (uint32_t)(i & 1), &err)) {
+        if (lanes_scene_add_triangle(&s, v, (uint32_t)(i & 1), &err) != LANES_OK) {
             CHECK(false, "add_triangle %d: %s", i, err.message);
             break;
         }
@@ -157,48 +141,49 @@ static void test_container(void)
           s.triangle_count);
     CHECK(s.verts[9 * 77777] == 77777.0f && s.material_of[77777] == 1, "contents kept");
     size_t cap = s.triangle_capacity;
-    CHECK(!lanes_scene_reserve_triangles(&s, LANES_SCENE_MAX_TRIANGLES, &err) &&
+    CHECK(lanes_scene_reserve_triangles(&s, LANES_SCENE_MAX_TRIANGLES, &err) != LANES_OK &&
               strstr(err.message, "too many"),
           "over the limit refused: %s", err.message);
-    CHECK(!lanes_scene_reserve_triangles(&s, SIZE_MAX, &err), "SIZE_MAX refused");
+    CHECK(lanes_scene_reserve_triangles(&s, SIZE_MAX, &err) != LANES_OK, "SIZE_MAX refused");
     /* Under the count limit but beyond memory: refused before allocating. */
-    CHECK(lanes_memory_fits("one byte", 1.0, NULL), "one byte fits");
-    CHECK(!lanes_memory_fits("an exabyte", 1e18, &err) && strstr(err.message, "an exabyte needs about") &&
-              strstr(err.message, "of memory"),
+    CHECK(lanes_memory_fits("one byte", 1.0, NULL) == LANES_OK, "one byte fits");
+    CHECK(lanes_memory_fits("an exabyte", 1e18, &err) != LANES_OK &&
+              strstr(err.message, "an exabyte needs about") && strstr(err.message, "of memory"),
           "an exabyte refused: %s", err.message);
     /* The loaders apply the memory policy; a scene built by hand gets it
      * when it asks. */
-    CHECK(lanes_scene_limit_to_memory(&s, &err) && s.triangle_budget > s.triangle_count, "memory budget: %s",
-          err.message);
+    CHECK(lanes_scene_limit_to_memory(&s, &err) == LANES_OK && s.triangle_budget > s.triangle_count,
+          "memory budget: %s", err.message);
     size_t most = LANES_SCENE_MAX_TRIANGLES - s.triangle_count;
     double most_bytes = (double)LANES_SCENE_MAX_TRIANGLES *
                         (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
-    if (lanes_memory_fits("", most_bytes, NULL)) {
+    if (lanes_memory_fits("", most_bytes, NULL) == LANES_OK) {
         printf("skip: this machine holds %.0f GiB, enough for 2^31 triangles\n", most_bytes / 1073741824.0);
     } else {
-        CHECK(!lanes_scene_reserve_triangles(&s, most, &err) && strstr(err.message, "to load and trace"),
+        CHECK(lanes_scene_reserve_triangles(&s, most, &err) != LANES_OK &&
+                  strstr(err.message, "to load and trace"),
               "2^31 triangles on this machine refused for memory: %s", err.message);
     }
     CHECK(s.triangle_capacity == cap && s.triangle_count == 100000, "unchanged after refusal");
     lanes_point_light pl = {{0, 5, 0}, {1, 1, 1}};
-    CHECK(lanes_scene_add_point_light(&s, &pl, &err), "point light");
-    CHECK(lanes_scene_validate(&s, &err), "valid: %s", err.message);
+    CHECK(lanes_scene_add_point_light(&s, &pl, &err) == LANES_OK, "point light");
+    CHECK(lanes_scene_validate(&s, &err) == LANES_OK, "valid: %s", err.message);
     float mn[3], mx[3];
     s.verts[4] = NAN;
     lanes_scene_bounds(&s, mn, mx);
     CHECK(mn[0] == 0.0f && mx[0] == 100000.0f && isfinite(mn[1]) && isfinite(mx[1]),
           "bounds skip NaN");
-    CHECK(!lanes_scene_validate(&s, &err) && strstr(err.message, "non-finite"), "NaN caught");
+    CHECK(lanes_scene_validate(&s, &err) != LANES_OK && strstr(err.message, "non-finite"), "NaN caught");
     s.verts[4] = 0.0f;
     s.material_of[5] = 7;
-    CHECK(!lanes_scene_validate(&s, &err) && strstr(err.message, "material"),
+    CHECK(lanes_scene_validate(&s, &err) != LANES_OK && strstr(err.message, "material"),
           "bad material index caught: %s", err.message);
     s.material_of[5] = 0;
     s.camera.up[0] = s.camera.up[2] = 0.0f;
     s.camera.eye[0] = s.camera.eye[2] = 0.0f;
     s.camera.eye[1] = 5.0f;
     s.camera.target[0] = s.camera.target[1] = s.camera.target[2] = 0.0f;
-    CHECK(!lanes_scene_validate(&s, &err) && strstr(err.message, "camera"),
+    CHECK(lanes_scene_validate(&s, &err) != LANES_OK && strstr(err.message, "camera"),
           "up parallel to view caught: %s", err.message);
     lanes_scene_free(&s);
     lanes_scene_free(&s); /* twice is harmless */
@@ -318,19 +303,27 @@ static void test_memory_limit(void)
     setenv("LANES_MEMORY_LIMIT", limit, 1);
     lanes_scene s;
     lanes_error err;
-    bool loaded = lanes_scene_load(two, &s, &err);
+    bool loaded = lanes_scene_load(two, &s, &err) == LANES_OK;
     CHECK(loaded && s.triangle_count == 163840, "two spheres under LANES_MEMORY_LIMIT=%s: %s", limit,
           loaded ? "loaded" : err.message);
     if (loaded) lanes_scene_free(&s);
-    loaded = lanes_scene_load(three, &s, &err);
+    /* the status travels up from where the failure was found (the scene's
+     * budget inside the file loader) with it, as the public API hands it on */
+    lanes_status st = lanes_scene_load(three, &s, &err);
+    loaded = st == LANES_OK;
     CHECK(!loaded && strstr(err.message, "three_spheres.json") && strstr(err.message, "245760 triangles") &&
               strstr(err.message, "LANES_MEMORY_LIMIT allows"),
           "three spheres over LANES_MEMORY_LIMIT=%s: %s", limit, loaded ? "loaded" : err.message);
+    CHECK(st == LANES_ERR_OUT_OF_MEMORY && err.status == st, "three spheres over the limit: status %s, err.status %s",
+          lanes_status_name(st), lanes_status_name(err.status));
     if (loaded) lanes_scene_free(&s);
     setenv("LANES_MEMORY_LIMIT", "lots", 1);
-    loaded = lanes_scene_load(two, &s, &err);
+    st = lanes_scene_load(two, &s, &err);
+    loaded = st == LANES_OK;
     CHECK(!loaded && strstr(err.message, "LANES_MEMORY_LIMIT 'lots' is not a size"), "LANES_MEMORY_LIMIT=lots: %s",
           loaded ? "loaded" : err.message);
+    CHECK(st == LANES_ERR_BAD_INPUT && err.status == st, "LANES_MEMORY_LIMIT=lots: status %s, err.status %s",
+          lanes_status_name(st), lanes_status_name(err.status));
     if (loaded) lanes_scene_free(&s);
     unsetenv("LANES_MEMORY_LIMIT");
 
@@ -354,8 +347,7 @@ static void check_mesh_file(const char *path, size_t tris, size_t verts, const f
 {
     lanes_mesh m;
     lanes_error err;
-    if (!CHECK(lanes_mesh_read(path, &m, &err), "%s: %s", path, err.message))
-        return;
+    if (!CHECK(lanes_mesh_read(path, &m, &err) == LANES_OK, "%s: %s", path, err.message)) return;
     CHECK(m.triangle_count == tris, "%s: %zu triangles, expected %zu", path, m.triangle_count,
           tris);
     CHECK(m.vertex_count == verts, "%s: %zu vertices, expected %zu", path, m.vertex_count, verts);
@@ -498,14 +490,15 @@ static void test_mesh_formats(void)
     lanes_xform x;
     const double t[3] = {0, 0, -3}, sc[3] = {3, 3, 3};
     lanes_xform_trs(&x, t, NULL, sc);
-    if (CHECK(lanes_mesh_import(&s, data("meshes/ok/quad.obj"), &x, mi, &err), "%s", err.message)) {
+    if (CHECK(lanes_mesh_import(&s, data("meshes/ok/quad.obj"), &x, mi, &err) == LANES_OK, "%s",
+              err.message)) {
         float mn[3], mx[3];
         lanes_scene_bounds(&s, mn, mx);
         CHECK(s.triangle_count == 2 && s.material_of[0] == 1 && s.material_of[1] == 1,
               "material index");
         CHECK(near3(mn, 0, 0, -3, 1e-6) && near3(mx, 3, 3, -3, 1e-6), "extra transform");
     }
-    CHECK(!lanes_mesh_import(&s, data("meshes/ok/quad.obj"), NULL, 9, &err) &&
+    CHECK(lanes_mesh_import(&s, data("meshes/ok/quad.obj"), NULL, 9, &err) != LANES_OK &&
               s.triangle_count == 2,
           "undefined material index refused, scene unchanged");
     lanes_scene_free(&s);
@@ -524,7 +517,7 @@ static void test_generators(void)
     } prims[] = {{"sphere", 0, 20}, {"sphere", -1, 1280}, {"box", -1, 12},
                  {"plane", -1, 2},  {"plane", 4, 32},     {"cylinder", -1, 128}};
     for (size_t i = 0; i < sizeof prims / sizeof prims[0]; i++) {
-        if (!CHECK(lanes_builtin_object(prims[i].name, prims[i].detail, &m, &err), "%s",
+        if (!CHECK(lanes_builtin_object(prims[i].name, prims[i].detail, &m, &err) == LANES_OK, "%s",
                    err.message))
             continue;
         CHECK(m.triangle_count == prims[i].tris, "%s detail %d: %zu triangles", prims[i].name,
@@ -546,7 +539,7 @@ static void test_generators(void)
         }
         lanes_mesh_free(&m);
     }
-    CHECK(!lanes_builtin_object("teapot", -1, &m, &err) && strstr(err.message, "valid"),
+    CHECK(lanes_builtin_object("teapot", -1, &m, &err) != LANES_OK && strstr(err.message, "valid"),
           "unknown object: %s", err.message);
 
     /* Loop subdivision of a tetrahedron: V + E vertices, 4F triangles. */
@@ -558,7 +551,7 @@ static void test_generators(void)
         for (int k = 0; k < 3; k++)
             idx[3 * t + k] = (uint32_t)tet_f[t][k];
     lanes_mesh tet = {pos, idx, 4, 4};
-    if (CHECK(lanes_mesh_subdivide(&tet, &f, &err), "%s", err.message)) {
+    if (CHECK(lanes_mesh_subdivide(&tet, &f, &err) == LANES_OK, "%s", err.message)) {
         CHECK(f.vertex_count == 10 && f.triangle_count == 16, "subdivided tet: %zu V %zu F",
               f.vertex_count, f.triangle_count);
         float mn[3], mx[3];
@@ -567,8 +560,8 @@ static void test_generators(void)
         CHECK(mn[0] >= 0.0f && mx[0] < 1.0f && mx[0] > 0.3f, "smoothed inside the hull");
         lanes_mesh_free(&f);
     }
-    if (CHECK(lanes_builtin_object("sphere", 5, &m, &err), "%s", err.message)) {
-        if (CHECK(lanes_mesh_decimate(&m, 8, &f, &err), "%s", err.message)) {
+    if (CHECK(lanes_builtin_object("sphere", 5, &m, &err) == LANES_OK, "%s", err.message)) {
+        if (CHECK(lanes_mesh_decimate(&m, 8, &f, &err) == LANES_OK, "%s", err.message)) {
             CHECK(f.triangle_count > 20 && f.triangle_count < m.triangle_count / 10,
                   "decimated %zu -> %zu", m.triangle_count, f.triangle_count);
             for (size_t i = 0; i < 3 * f.triangle_count; i++)
@@ -601,15 +594,14 @@ static void check_builtin(const scene_expect *e)
     lanes_scene s, again;
     lanes_error err;
     double t0 = now();
-    if (!CHECK(lanes_scene_load(e->name, &s, &err), "%s: %s", e->name, err.message))
-        return;
+    if (!CHECK(lanes_scene_load(e->name, &s, &err) == LANES_OK, "%s: %s", e->name, err.message)) return;
     double dt = now() - t0;
     printf("  %-18s %9zu triangles  %zu materials  %zu point + %zu area lights  %.3f s\n", e->name,
            s.triangle_count, s.material_count, s.point_light_count, s.area_light_count, dt);
     CHECK(s.triangle_count >= e->min_tris && s.triangle_count <= e->max_tris,
           "%s: %zu triangles outside [%zu, %zu]", e->name, s.triangle_count, e->min_tris,
           e->max_tris);
-    CHECK(lanes_scene_validate(&s, &err), "%s: %s", e->name, err.message);
+    CHECK(lanes_scene_validate(&s, &err) == LANES_OK, "%s: %s", e->name, err.message);
     CHECK(all_finite(&s), "%s: non-finite vertex", e->name);
     CHECK(strcmp(s.name, e->name) == 0, "%s: name '%s'", e->name, s.name);
     CHECK(s.point_light_count + s.area_light_count >= 1, "%s: no light", e->name);
@@ -643,7 +635,7 @@ static void check_builtin(const scene_expect *e)
                   s.area_light_count == 1 && s.point_light_count == 1,
               "default: mirror, glass, an area light and a point light");
     /* Deterministic: the same bytes every time. */
-    if (CHECK(lanes_scene_load(e->name, &again, &err), "%s again: %s", e->name, err.message)) {
+    if (CHECK(lanes_scene_load(e->name, &again, &err) == LANES_OK, "%s again: %s", e->name, err.message)) {
         CHECK(again.triangle_count == s.triangle_count &&
                   memcmp(again.verts, s.verts, 9 * sizeof(float) * s.triangle_count) == 0 &&
                   memcmp(again.material_of, s.material_of, sizeof(uint32_t) * s.triangle_count) ==
@@ -696,15 +688,13 @@ static void test_real_meshes(void)
         snprintf(path, sizeof path, "%s/%s", lanes_mesh_dir(), m[i].file);
         lanes_mesh mesh;
         lanes_error err;
-        if (!CHECK(lanes_mesh_read(path, &mesh, &err), "%s", err.message))
-            continue;
+        if (!CHECK(lanes_mesh_read(path, &mesh, &err) == LANES_OK, "%s", err.message)) continue;
         CHECK(mesh.triangle_count == m[i].tris, "%s: %zu triangles", path, mesh.triangle_count);
         printf("  %-24s %6zu triangles %6zu vertices\n", m[i].file, mesh.triangle_count,
                mesh.vertex_count);
         lanes_mesh_free(&mesh);
         /* Normalized as documented: on y = 0, centered, largest extent 1. */
-        if (!CHECK(lanes_builtin_object(m[i].name, 0, &mesh, &err), "%s", err.message))
-            continue;
+        if (!CHECK(lanes_builtin_object(m[i].name, 0, &mesh, &err) == LANES_OK, "%s", err.message)) continue;
         float mn[3], mx[3];
         mesh_bounds(&mesh, mn, mx);
         float ext = fmaxf(mx[0] - mn[0], fmaxf(mx[1] - mn[1], mx[2] - mn[2]));
@@ -723,7 +713,7 @@ static void test_scene_files(void)
     lanes_scene s;
     lanes_error err;
     const char *room = data("scenes/ok/room.json");
-    if (CHECK(lanes_scene_load(room, &s, &err), "%s", err.message)) {
+    if (CHECK(lanes_scene_load(room, &s, &err) == LANES_OK, "%s", err.message)) {
         CHECK(strcmp(s.name, "test room") == 0, "name '%s'", s.name);
         /* plane 2 + box 12 + sphere(detail 2) 320 + quad 2 + tet 4 +
          * the visible area light 2 */
@@ -762,7 +752,7 @@ static void test_scene_files(void)
         CHECK(s.area_lights[1].emission[2] == 3.0f, "invisible area light kept");
         lanes_scene_free(&s);
     }
-    if (CHECK(lanes_scene_load(data("scenes/ok/minimal.json"), &s, &err), "%s", err.message)) {
+    if (CHECK(lanes_scene_load(data("scenes/ok/minimal.json"), &s, &err) == LANES_OK, "%s", err.message)) {
         CHECK(s.triangle_count == 12 && strcmp(s.name, "minimal") == 0, "minimal");
         /* No camera given: one framing the box from +z. */
         CHECK(s.camera.eye[2] > 1.0f && fabsf(s.camera.target[0]) < 1e-6f, "framed camera");
@@ -771,7 +761,8 @@ static void test_scene_files(void)
     /* From memory, with a base directory for the mesh. */
     static const char text[] = "{\"materials\": {\"m\": {\"type\": \"diffuse\"}},"
                                " \"objects\": [{\"mesh\": \"quad.obj\", \"material\": \"m\"}]}";
-    if (CHECK(lanes_scene_file_parse(text, sizeof text - 1, "inline", data("meshes/ok"), &s, &err),
+    if (CHECK(lanes_scene_file_parse(text, sizeof text - 1, "inline", data("meshes/ok"), &s, &err) ==
+                  LANES_OK,
               "%s", err.message)) {
         CHECK(s.triangle_count == 2, "inline scene");
         lanes_scene_free(&s);
@@ -784,28 +775,28 @@ static void test_load(void)
 {
     lanes_scene s;
     lanes_error err;
-    if (CHECK(lanes_scene_load(NULL, &s, &err), "NULL: %s", err.message)) {
+    if (CHECK(lanes_scene_load(NULL, &s, &err) == LANES_OK, "NULL: %s", err.message)) {
         CHECK(strcmp(s.name, "default") == 0, "NULL gives the default scene");
         lanes_scene_free(&s);
     }
-    if (CHECK(lanes_scene_load("", &s, &err), "\"\": %s", err.message)) {
+    if (CHECK(lanes_scene_load("", &s, &err) == LANES_OK, "\"\": %s", err.message)) {
         CHECK(strcmp(s.name, "default") == 0, "\"\" gives the default scene");
         lanes_scene_free(&s);
     }
-    CHECK(!lanes_scene_load("sponza", &s, &err) && strstr(err.message, "sponza") &&
+    CHECK(lanes_scene_load("sponza", &s, &err) != LANES_OK && strstr(err.message, "sponza") &&
               strstr(err.message, "valid") && strstr(err.message, "sponza-bunny") &&
               strstr(err.message, "hairball-small"),
           "unknown name lists the valid ones: %s", err.message);
     CHECK(s.triangle_count == 0 && s.verts == NULL, "failed load leaves an empty scene");
-    CHECK(!lanes_scene_load("no/such/mesh.obj", &s, &err) &&
+    CHECK(lanes_scene_load("no/such/mesh.obj", &s, &err) != LANES_OK &&
               strstr(err.message, "no/such/mesh.obj: no such file"),
           "missing mesh: %s", err.message);
-    CHECK(!lanes_scene_load("missing-scene.json", &s, &err) &&
+    CHECK(lanes_scene_load("missing-scene.json", &s, &err) != LANES_OK &&
               strstr(err.message, "missing-scene.json: no such file"),
           "missing scene file: %s", err.message);
-    if (CHECK(lanes_scene_load(data("meshes/ok/tet.ply"), &s, &err), "mesh: %s", err.message)) {
+    if (CHECK(lanes_scene_load(data("meshes/ok/tet.ply"), &s, &err) == LANES_OK, "mesh: %s", err.message)) {
         CHECK(s.triangle_count == 4 && s.point_light_count == 1 && s.material_count == 1 &&
-                  lanes_scene_validate(&s, &err),
+                  lanes_scene_validate(&s, &err) == LANES_OK,
               "a mesh file becomes a lit scene");
         lanes_scene_free(&s);
     }
@@ -816,7 +807,7 @@ static void test_load(void)
     if (old)
         snprintf(saved, sizeof saved, "%s", old);
     setenv("LANES_MESH_DIR", "/nonexistent/lanes-meshes", 1);
-    CHECK(!lanes_scene_load("dragon", &s, &err) && strstr(err.message, "fetch_meshes.sh") &&
+    CHECK(lanes_scene_load("dragon", &s, &err) != LANES_OK && strstr(err.message, "fetch_meshes.sh") &&
               strstr(err.message, "/nonexistent/lanes-meshes/ChineseDragon-10kv.off"),
           "missing meshes: %s", err.message);
     if (old)
@@ -945,7 +936,7 @@ static void test_corpus(void)
         lanes_mesh m;
         lanes_error err;
         memset(&err, 0, sizeof err);
-        if (CHECK(!lanes_mesh_read(path, &m, &err), "%s: accepted", path)) {
+        if (CHECK(lanes_mesh_read(path, &m, &err) != LANES_OK, "%s: accepted", path)) {
             check_message(path, path, err.message, bad_meshes[i].expect);
             CHECK(m.positions == NULL && m.indices == NULL && m.triangle_count == 0,
                   "%s: failed read leaves an empty mesh", path);
@@ -954,7 +945,7 @@ static void test_corpus(void)
         }
         /* The same file as a scene spec goes through the same checks. */
         lanes_scene s;
-        if (!CHECK(!lanes_scene_load(path, &s, &err), "%s: loaded as a scene", path))
+        if (!CHECK(lanes_scene_load(path, &s, &err) != LANES_OK, "%s: loaded as a scene", path))
             lanes_scene_free(&s);
     }
     for (size_t i = 0; i < sizeof bad_scenes / sizeof bad_scenes[0]; i++) {
@@ -962,7 +953,7 @@ static void test_corpus(void)
         lanes_scene s;
         lanes_error err;
         memset(&err, 0, sizeof err);
-        if (CHECK(!lanes_scene_load(path, &s, &err), "%s: accepted", path)) {
+        if (CHECK(lanes_scene_load(path, &s, &err) != LANES_OK, "%s: accepted", path)) {
             check_message(path, path, err.message, bad_scenes[i].expect);
             CHECK(s.triangle_count == 0 && s.verts == NULL && s.materials == NULL,
                   "%s: failed load leaves an empty scene", path);
@@ -1000,10 +991,7 @@ int main(int argc, char **argv)
         test_corpus();
         test_builtins(false);
     }
-    if (g_failures) {
-        fprintf(stderr, "test_scenes %s: %d failure(s)\n", mode, g_failures);
-        return 1;
-    }
-    printf("test_scenes %s: all passed\n", mode);
-    return 0;
+    char name[64];
+    snprintf(name, sizeof name, "test_scenes %s", mode);
+    return harness_summary(name);
 }

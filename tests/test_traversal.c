@@ -43,40 +43,18 @@
 #include "build/scenes_builtin.h"
 #include "simd/isa.h"
 #include "trace/kernels.h"
+#include "tests/harness.h"
 #include "tests/reference.h"
 
 #define SKIP 77
 
-static int failures;
-static int max_print = 40; /* TEST_MAX_PRINT overrides */
-
-#define CHECK(cond, ...)                                                                   \
-    do {                                                                                   \
-        if (!(cond)) {                                                                     \
-            failures++;                                                                    \
-            if (failures <= max_print) {                                                   \
-                printf("FAIL %s:%d: ", __FILE__, __LINE__);                                \
-                printf(__VA_ARGS__);                                                       \
-                printf("\n");                                                              \
-            }                                                                              \
-        }                                                                                  \
-    } while (0)
-
 /* ---- random numbers ------------------------------------------------------ */
 
-static uint64_t splitmix(uint64_t *s)
-{
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-static double rnd(uint64_t *s) { return (double)(splitmix(s) >> 11) * 0x1p-53; }
-static float rndf(uint64_t *s, float lo, float hi) { return lo + (hi - lo) * (float)rnd(s); }
+static float rndf(harness_rng *s, float lo, float hi) { return lo + (hi - lo) * (float)harness_uniform(s); }
 
-static void random_dir(uint64_t *s, float d[3])
+static void random_dir(harness_rng *s, float d[3])
 {
-    double z = 2.0 * rnd(s) - 1.0, phi = 6.283185307179586 * rnd(s), r = sqrt(1.0 - z * z);
+    double z = 2.0 * harness_uniform(s) - 1.0, phi = 6.283185307179586 * harness_uniform(s), r = sqrt(1.0 - z * z);
     d[0] = (float)(r * cos(phi)), d[1] = (float)(r * sin(phi)), d[2] = (float)z;
 }
 
@@ -86,7 +64,7 @@ static void add_tri(lanes_scene *s, const float a[3], const float b[3], const fl
 {
     float v[9] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]};
     lanes_error err;
-    if (!lanes_scene_add_triangle(s, v, 0, &err)) {
+    if (lanes_scene_add_triangle(s, v, 0, &err) != LANES_OK) {
         printf("cannot add a triangle: %s\n", err.message);
         exit(1);
     }
@@ -102,7 +80,7 @@ static void scene_start(lanes_scene *s, const char *name)
     m.kind = LANES_MAT_DIFFUSE;
     m.color[0] = m.color[1] = m.color[2] = 0.7f;
     lanes_error err;
-    if (!lanes_scene_add_material(s, &m, NULL, &err)) {
+    if (lanes_scene_add_material(s, &m, NULL, &err) != LANES_OK) {
         printf("cannot add a material: %s\n", err.message);
         exit(1);
     }
@@ -113,7 +91,7 @@ static void scene_start(lanes_scene *s, const char *name)
  * the vertices rotated (same plane, t equal up to rounding). */
 static void scene_random(lanes_scene *s)
 {
-    uint64_t seed = 1234;
+    harness_rng seed = {1234};
     scene_start(s, "random");
     for (int i = 0; i < 600; i++) {
         float c[3], v[3][3];
@@ -123,7 +101,7 @@ static void scene_random(lanes_scene *s)
         add_tri(s, v[0], v[1], v[2]);
     }
     for (int i = 0; i < 40; i++) {
-        size_t j = (size_t)(splitmix(&seed) % 600);
+        size_t j = (size_t)(harness_next(&seed) % 600);
         const float *v = s->verts + 9 * j;
         if (i % 2)
             add_tri(s, v, v + 3, v + 6);
@@ -185,7 +163,7 @@ static void scene_tiny(lanes_scene *s, int count)
     char name[32];
     snprintf(name, sizeof name, "tiny%d", count);
     scene_start(s, name);
-    uint64_t seed = 99 + (uint64_t)count;
+    harness_rng seed = {99 + (uint64_t)count};
     for (int i = 0; i < count; i++) {
         float v[3][3];
         for (int k = 0; k < 3; k++)
@@ -226,7 +204,7 @@ static const char *ray_kind_of(size_t r, size_t n)
  * sphere), cut short before their target or started beyond it, parallel to
  * the axes (infinite reciprocals: NaN slab distances at flat boxes),
  * starting on a surface, and invalid rays. */
-static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, uint64_t seed)
+static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, harness_rng seed)
 {
     float lo[3], hi[3], size;
     bounds(s, lo, hi, &size);
@@ -235,18 +213,18 @@ static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, uint64_
         lanes_ray *r = &rays[i];
         float o[3], d[3], p[3];
         float tnear = 0.0f, tfar = INFINITY;
-        size_t tri = (size_t)(splitmix(&seed) % ntri);
+        size_t tri = (size_t)(harness_next(&seed) % ntri);
         int kind = (int)(i % 9);
         if (i + 3 >= n) kind = 9; /* the last few rays are invalid */
-        double b1 = rnd(&seed), b2 = rnd(&seed);
+        double b1 = harness_uniform(&seed), b2 = harness_uniform(&seed);
         if (b1 + b2 > 1.0) b1 = 1.0 - b1, b2 = 1.0 - b2;
         switch (kind) {
         case 3: /* a vertex: (b1, b2) = (1, 0), (0, 1) or (0, 0) */
-            b1 = (double)(splitmix(&seed) % 2);
-            b2 = b1 > 0 ? 0.0 : (double)(splitmix(&seed) % 2);
+            b1 = (double)(harness_next(&seed) % 2);
+            b2 = b1 > 0 ? 0.0 : (double)(harness_next(&seed) % 2);
             break;
         case 4: /* the midpoint of the edge v0-v1 or v1-v2 */
-            b1 = 0.5, b2 = (double)(splitmix(&seed) % 2) * 0.5;
+            b1 = 0.5, b2 = (double)(harness_next(&seed) % 2) * 0.5;
             break;
         default: break;
         }
@@ -257,8 +235,8 @@ static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, uint64_
             random_dir(&seed, d);
             break;
         case 6: { /* parallel to an axis, through the target point */
-            int ax = (int)(splitmix(&seed) % 3);
-            float sg = splitmix(&seed) % 2 ? 1.0f : -1.0f;
+            int ax = (int)(harness_next(&seed) % 3);
+            float sg = harness_next(&seed) % 2 ? 1.0f : -1.0f;
             d[0] = d[1] = d[2] = 0.0f;
             d[ax] = sg;
             for (int a = 0; a < 3; a++) o[a] = p[a] - d[a] * size;
@@ -270,7 +248,7 @@ static size_t make_rays(const lanes_scene *s, lanes_ray *rays, size_t n, uint64_
             break;
         case 8: /* a component that is zero (signed) or tiny */
             for (int a = 0; a < 3; a++) d[a] = p[a] - o[a];
-            d[splitmix(&seed) % 3] = splitmix(&seed) % 2 ? -0.0f : 1e-30f;
+            d[harness_next(&seed) % 3] = harness_next(&seed) % 2 ? -0.0f : 1e-30f;
             break;
         case 9: /* invalid */
             random_dir(&seed, d);
@@ -455,12 +433,12 @@ static bool build_bvhs(const lanes_scene *s, lanes_bvh2 bvh[LEAF_SIZES], lanes_w
         lanes_bvh_default_options(&bo);
         bo.max_leaf_size = leaf_sizes[l];
         bo.threads = 1;
-        if (!lanes_bvh2_build(s, &bo, &bvh[l], &err)) {
+        if (lanes_bvh2_build(s, &bo, &bvh[l], &err) != LANES_OK) {
             printf("FAIL: BVH2 of %s: %s\n", s->name, err.message);
             return false;
         }
         for (int w = 0; w < 3; w++)
-            if (!lanes_wbvh_from_bvh2(&bvh[l], 4 << w, &wide[l][w], &err)) {
+            if (lanes_wbvh_from_bvh2(&bvh[l], 4 << w, &wide[l][w], &err) != LANES_OK) {
                 printf("FAIL: %d-wide BVH of %s: %s\n", 4 << w, s->name, err.message);
                 return false;
             }
@@ -554,19 +532,18 @@ static bool occlusion_ok(verdict v, long b, const lanes_hit *h, bool occluded)
 
 static void brute_scene(const lanes_scene *s, size_t nrays)
 {
-    int fail0 = failures;
+    long fail0 = harness.failures;
     lanes_bvh2 bvh[LEAF_SIZES];
     lanes_wbvh wide[LEAF_SIZES][3];
     memset(bvh, 0, sizeof bvh);
     memset(wide, 0, sizeof wide);
     if (!build_bvhs(s, bvh, wide)) {
-        failures++;
+        harness_fail("%s: the BVHs did not build (see above)", s->name);
         return;
     }
     lanes_triangles tris;
     if (!lanes_triangles_alloc(&tris, s->triangle_count)) {
-        printf("FAIL: out of memory\n");
-        failures++;
+        harness_fail("out of memory");
         return;
     }
     for (size_t k = 0; k < s->triangle_count; k++) {
@@ -583,7 +560,7 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
     long *brute = malloc(nrays * sizeof *brute);
     float *bt = malloc(nrays * sizeof *bt), *bu = malloc(nrays * sizeof *bu),
           *bv = malloc(nrays * sizeof *bv);
-    make_rays(s, rays, nrays, 0xabcdef + s->triangle_count);
+    make_rays(s, rays, nrays, harness_rng_seed(0xabcdef + s->triangle_count));
 
     size_t ties = 0, outside = 0, edges = 0, hits_total = 0, checks = 0, by_kind[10] = {0};
     dstats ds = {0, 0, 0, 0};
@@ -655,7 +632,7 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                               ray_kind_of(r, nrays), h->prim == LANES_NO_HIT ? -1 : (int)h->prim,
                               h->t, h->u, h->v, brute[r], exists ? bt[r] : 0.0f,
                               exists ? bu[r] : 0.0f, exists ? bv[r] : 0.0f);
-                        if (!ok && failures - fail0 <= 10) {
+                        if (!ok && harness.failures - fail0 <= 10) {
                             print_ray(&rays[r]);
                             if (exists) print_tri(s, (size_t)brute[r]);
                             if (h->prim < s->triangle_count) print_tri(s, h->prim);
@@ -673,8 +650,8 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
            "other) -> %s\n",
            s->name, s->triangle_count, nrays, checks, hits_total, ties, outside, edges,
            ds.ties + ds.grazing + ds.other, ds.ties, ds.grazing, ds.other,
-           failures == fail0 && ds.other == 0 ? "ok" : "FAIL");
-    if (failures != fail0) {
+           harness.failures == fail0 && ds.other == 0 ? "ok" : "FAIL");
+    if (harness.failures != fail0) {
         printf("  traversal results that differ from the brute force, by kind of ray:");
         for (int kk = 0; kk < 10; kk++)
             if (by_kind[kk]) printf(" %s %zu", ray_kind_names[kk], by_kind[kk]);
@@ -717,9 +694,8 @@ static int run_brute(const char *which)
         lanes_error err;
         memset(&err, 0, sizeof err);
         lanes_scene_init(&s);
-        if (!lanes_scene_load("default", &s, &err)) {
-            printf("FAIL: cannot load the default scene: %s\n", err.message);
-            failures++;
+        if (lanes_scene_load("default", &s, &err) != LANES_OK) {
+            harness_fail("cannot load the default scene: %s", err.message);
         } else {
             /* brute force costs rays x triangles per set and algorithm */
             size_t n = (size_t)(2e7 / (double)(s.triangle_count + 1));
@@ -732,7 +708,7 @@ static int run_brute(const char *which)
         printf("unknown scene '%s' (random, sphere, grid, tiny, default, all)\n", which);
         return 2;
     }
-    return failures ? 1 : 0;
+    return harness_summary("test_traversal brute");
 }
 
 /* ---- against Embree on real meshes ----------------------------------------- */
@@ -840,12 +816,12 @@ static int run_embree(const char *name, long nrays)
             }
         }
     }
-    if (!lanes_scene_load(spec, &s, &err)) {
+    if (lanes_scene_load(spec, &s, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         return 1;
     }
     lanes_embree *emb;
-    if (!lanes_embree_create(&s, lanes_embree_isa_best(), 0, &emb, &err)) {
+    if (lanes_embree_create(&s, lanes_embree_isa_best(), 0, &emb, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         lanes_scene_free(&s);
         return 1;
@@ -855,12 +831,12 @@ static int run_embree(const char *name, long nrays)
     memset(wide, 0, sizeof wide);
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
-    if (!lanes_bvh2_build(&s, &bo, &bvh, &err)) {
+    if (lanes_bvh2_build(&s, &bo, &bvh, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         return 1;
     }
     for (int w = 0; w < 3; w++)
-        if (!lanes_wbvh_from_bvh2(&bvh, 4 << w, &wide[w], &err)) {
+        if (lanes_wbvh_from_bvh2(&bvh, 4 << w, &wide[w], &err) != LANES_OK) {
             printf("FAIL: %s\n", err.message);
             return 1;
         }
@@ -892,7 +868,7 @@ static int run_embree(const char *name, long nrays)
                                      : v3_add(v3_scale(v3_add(v3_load(blo), v3_load(bhi)), 0.5f),
                                            v3_scale(v3_normalize(v3_load(c->up)), sqrtf(v3_dot(diag, diag))));
     size_t ns = 0, nd = 0;
-    uint64_t seed = 42;
+    harness_rng seed = {42};
     for (size_t i = 0; i < np; i++) {
         if (eh[i].prim == LANES_NO_HIT) continue;
         const float *v = s.verts + 9 * (size_t)eh[i].prim;
@@ -904,7 +880,7 @@ static int run_embree(const char *name, long nrays)
         vec3 to = v3_sub(light, o);
         float dist = sqrtf(v3_dot(to, to));
         if (dist > 0 && v3_dot(to, n) > 0) shadow[ns++] = ray_of(o, v3_scale(to, 1.0f / dist), 0.0f, dist * (1.0f - 1e-4f));
-        float r1 = (float)rnd(&seed), r2 = (float)rnd(&seed);
+        float r1 = (float)harness_uniform(&seed), r2 = (float)harness_uniform(&seed);
         vec3 a = fabsf(n.x) > 0.9f ? v3(0, 1, 0) : v3(1, 0, 0);
         vec3 nx = v3_normalize(v3_cross(a, n)), ny = v3_cross(n, nx);
         float phi = 6.2831853f * r1, rr = sqrtf(r2);
@@ -915,7 +891,6 @@ static int run_embree(const char *name, long nrays)
     ray_set sets[3] = {{"primary", primary, np, false}, {"shadow", shadow, ns, true},
                        {"diffuse", diffuse, nd, false}};
 
-    int status = 0;
     /* The adapter's layouts: every packet and stream API, with either
      * context, answers what rtcIntersect1/rtcOccluded1 answer (ray k*W+j is
      * lane j of packet k; the tail packet is masked). */
@@ -930,8 +905,8 @@ static int run_embree(const char *name, long nrays)
         for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
             if (!lanes_embree_supports(emb, (lanes_embree_method)m)) continue;
             lanes_embree_batch b;
-            if (!lanes_embree_batch_init(&b, (lanes_embree_method)m, rs->occlusion, rs->rays, rs->n,
-                                         &err)) {
+            if (lanes_embree_batch_init(&b, (lanes_embree_method)m, rs->occlusion, rs->rays, rs->n, &err) !=
+                LANES_OK) {
                 printf("FAIL: %s\n", err.message);
                 return 1;
             }
@@ -950,15 +925,10 @@ static int run_embree(const char *name, long nrays)
                     lanes_embree_batch_hits(&b, lh);
                     for (size_t r = 0; r < rs->n; r++) same += same_hit(&lh[r], &eh[r]);
                 }
-                bool ok = same >= rs->n - rs->n / 10000 && !lanes_embree_error(emb)[0];
-                if (!ok) {
-                    printf("FAIL: embree %s%s on %zu %s rays: only %zu agree with the single-ray "
-                           "call %s\n",
-                           lanes_embree_method_name((lanes_embree_method)m, rs->occlusion),
-                           coherent ? "+coherent" : "", rs->n, rs->kind, same,
-                           lanes_embree_error(emb));
-                    status = 1;
-                }
+                CHECK(same >= rs->n - rs->n / 10000 && !lanes_embree_error(emb)[0],
+                      "embree %s%s on %zu %s rays: only %zu agree with the single-ray call %s",
+                      lanes_embree_method_name((lanes_embree_method)m, rs->occlusion),
+                      coherent ? "+coherent" : "", rs->n, rs->kind, same, lanes_embree_error(emb));
                 apis++;
                 least = same < least ? same : least;
             }
@@ -1023,7 +993,8 @@ static int run_embree(const char *name, long nrays)
                        "tie, %zu other) %s\n",
                        k->name, scheme ? "single" : "wide", rs->kind, n, 100.0 * frac,
                        cats[CAT_GRAZING], cats[CAT_TIE], cats[CAT_OTHER], pass ? "ok" : "FAIL");
-                if (!pass) status = 1;
+                CHECK(pass, "%s %s %s: agreement with Embree below 99.99%%", k->name,
+                      scheme ? "single" : "wide", rs->kind);
             }
         }
     }
@@ -1032,13 +1003,13 @@ static int run_embree(const char *name, long nrays)
     lanes_bvh2_free(&bvh);
     lanes_embree_destroy(emb);
     lanes_scene_free(&s);
-    return status;
+    return harness_summary("test_traversal embree");
 }
 
 int main(int argc, char **argv)
 {
     setvbuf(stdout, NULL, _IOLBF, 0);
-    if (getenv("TEST_MAX_PRINT")) max_print = atoi(getenv("TEST_MAX_PRINT"));
+    if (getenv("TEST_MAX_PRINT")) harness.max_print = atoi(getenv("TEST_MAX_PRINT"));
     char features[512];
     lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
     printf("cpu: %s\nfeatures: %s\nsets:", lanes_cpu()->brand, features);

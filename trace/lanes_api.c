@@ -234,11 +234,11 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
                         "%s: triangle %zu: vertex index %u, but there are %zu vertices", fn, i / 3,
                         indices[i], vertex_count);
 
-    lanes_error err = {{0}};
+    lanes_error err = {0};
     double bytes = (double)triangle_count *
                    (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
-    if (!lanes_memory_fits("an accel", bytes, &err))
-        return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: %s", fn, err.message);
+    if (lanes_memory_fits("an accel", bytes, &err) != LANES_OK)
+        return fail(device, err.status, "%s: %s", fn, err.message);
 
     struct lanes_accel_impl *a = calloc(1, sizeof *a);
     lanes_scene scene;
@@ -269,17 +269,15 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
     bo.threads = device->threads;
-    bool ok = lanes_bvh2_build(&scene, &bo, &a->bvh2, &err);
-    if (ok) lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
+    lanes_status status = lanes_bvh2_build(&scene, &bo, &a->bvh2, &err);
+    if (status == LANES_OK) lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
     free(scene.verts);
-    if (ok && !lanes_wbvh_from_bvh2(&a->bvh2, device->k->wide_width, &a->wide, &err)) {
+    if (status == LANES_OK &&
+        (status = lanes_wbvh_from_bvh2(&a->bvh2, device->k->wide_width, &a->wide, &err)) != LANES_OK)
         lanes_bvh2_free(&a->bvh2);
-        ok = false;
-    }
-    if (!ok) {
+    if (status != LANES_OK) {
         free(a);
-        /* The input was checked above: what is left is memory. */
-        return fail(device, LANES_ERR_OUT_OF_MEMORY, "%s: %s", fn, err.message);
+        return fail(device, status, "%s: %s", fn, err.message);
     }
     a->triangles = triangle_count;
     a->device = device;

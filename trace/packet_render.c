@@ -577,9 +577,9 @@ int lanes_packet_min_size(int lanes)
     return n;
 }
 
-bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
-                         const lanes_packet_render_options *opt, lanes_render_result *out,
-                         lanes_packet_metrics *metrics, lanes_error *err)
+lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                                 const lanes_packet_render_options *opt, lanes_render_result *out,
+                                 lanes_packet_metrics *metrics, lanes_error *err)
 {
     memset(out, 0, sizeof *out);
     if (metrics) memset(metrics, 0, sizeof *metrics);
@@ -590,22 +590,21 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     job.opt = opt;
     job.k = lanes_kernels_for(opt->base.isa);
     if (!job.k || !lanes_isa_supported(opt->base.isa)) {
-        snprintf(err->message, sizeof err->message, "render: instruction set '%s' is not available",
-                 lanes_isa_name(opt->base.isa));
-        return false;
+        return lanes_error_set(err, job.k ? LANES_ERR_CPU_LACKS : LANES_ERR_NOT_COMPILED,
+                               "render: instruction set '%s' is not available",
+                               lanes_isa_name(opt->base.isa));
     }
     int min_packet = lanes_packet_min_size(job.k->lanes);
     if (opt->packet_size < min_packet || opt->packet_size > LANES_PACKET_MAX_RAYS) {
-        snprintf(err->message, sizeof err->message,
-                 "render: packet size %d out of range (%d..%d at %d lanes: primary packets are square "
-                 "tiles of a power-of-two side, and the largest one of at most that many rays must "
-                 "hold a whole %d-lane group)",
-                 opt->packet_size, min_packet, LANES_PACKET_MAX_RAYS, job.k->lanes, job.k->lanes);
-        return false;
+        return lanes_error_set(
+            err, LANES_ERR_BAD_INPUT,
+            "render: packet size %d out of range (%d..%d at %d lanes: primary packets are square "
+            "tiles of a power-of-two side, and the largest one of at most that many rays must "
+            "hold a whole %d-lane group)",
+            opt->packet_size, min_packet, LANES_PACKET_MAX_RAYS, job.k->lanes, job.k->lanes);
     }
     if (opt->queue_min < 1) {
-        snprintf(err->message, sizeof err->message, "render: queue size %d below 1", opt->queue_min);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: queue size %d below 1", opt->queue_min);
     }
     int side = 1; /* the primary packets' tile: the largest power-of-two square that fits */
     while ((side * 2) * (side * 2) <= opt->packet_size) side *= 2;
@@ -614,24 +613,21 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
         opt->base.spp < 1 || opt->base.spp > 65536 || opt->base.max_depth < 0 ||
         opt->base.max_depth > LANES_MAX_DEPTH) {
-        snprintf(err->message, sizeof err->message,
-                 "render: image size %dx%d, %d samples per pixel or depth %d out of range "
-                 "(1..16384, 1..65536, 0..%d)",
-                 job.width, job.height, opt->base.spp, opt->base.max_depth, LANES_MAX_DEPTH);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "render: image size %dx%d, %d samples per pixel or depth %d out of range "
+                               "(1..16384, 1..65536, 0..%d)",
+                               job.width, job.height, opt->base.spp, opt->base.max_depth, LANES_MAX_DEPTH);
     }
     if (accel->bvh2.node_count == 0) {
-        snprintf(err->message, sizeof err->message, "render: the scene has no triangles");
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: the scene has no triangles");
     }
     job.side = side;
     job.qx = (job.width + side - 1) / side;
     job.qy = (job.height + side - 1) / side;
     job.quads = (size_t)job.qx * (size_t)job.qy;
     if (opt->base.accuracy < LANES_ACCURACY_FROM_SCENE || opt->base.accuracy >= LANES_ACCURACY_COUNT) {
-        snprintf(err->message, sizeof err->message, "render: accuracy mode %d unknown",
-                 (int)opt->base.accuracy);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: accuracy mode %d unknown",
+                               (int)opt->base.accuracy);
     }
     lanes_scene_plan_make(scene, opt->base.accuracy, &job.plan);
     job.resolved = *opt;
@@ -733,8 +729,7 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     free(job.subtree);
     if (!ok) {
         free(job.rgb);
-        snprintf(err->message, sizeof err->message, "render: out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "render: out of memory");
     }
     float inv = 1.0f / (float)opt->base.spp;
     for (size_t i = 0; i < (size_t)job.width * (size_t)job.height * 3; i++) job.rgb[i] *= inv;
@@ -742,5 +737,5 @@ bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *acc
     out->width = job.width;
     out->height = job.height;
     out->rays = out->camera_rays + out->shadow_rays + out->secondary_rays;
-    return true;
+    return LANES_OK;
 }

@@ -76,8 +76,8 @@ typedef struct lanes_packet_metrics {
  * 16 lanes). */
 int lanes_packet_min_size(int lanes);
 
-bool lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
-                         const lanes_packet_render_options *opt, lanes_render_result *out,
-                         lanes_packet_metrics *metrics, lanes_error *err);
+lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                                 const lanes_packet_render_options *opt, lanes_render_result *out,
+                                 lanes_packet_metrics *metrics, lanes_error *err);
 
 #endif

@@ -42,19 +42,20 @@ void lanes_render_default_options(lanes_render_options *o)
     o->area_samples = 4;
 }
 
-bool lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_render_accel *a,
-                       lanes_error *err)
+lanes_status lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads,
+                                      lanes_render_accel *a, lanes_error *err)
 {
+    lanes_status status;
     lanes_bvh_build_options bo;
     memset(a, 0, sizeof *a);
     lanes_bvh_default_options(&bo);
     bo.threads = threads;
-    if (!lanes_bvh2_build(scene, &bo, &a->bvh2, err)) return false;
-    if (wide_width > 0 && !lanes_wbvh_from_bvh2(&a->bvh2, wide_width, &a->wide, err)) {
+    if ((status = lanes_bvh2_build(scene, &bo, &a->bvh2, err)) != LANES_OK) return status;
+    if (wide_width > 0 && (status = lanes_wbvh_from_bvh2(&a->bvh2, wide_width, &a->wide, err)) != LANES_OK) {
         lanes_bvh2_free(&a->bvh2);
-        return false;
+        return status;
     }
-    return true;
+    return LANES_OK;
 }
 
 void lanes_render_accel_free(lanes_render_accel *a)
@@ -237,8 +238,8 @@ double lanes_render_clock(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
-                  const lanes_render_options *opt, lanes_render_result *out, lanes_error *err)
+lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                          const lanes_render_options *opt, lanes_render_result *out, lanes_error *err)
 {
     memset(out, 0, sizeof *out);
     render_job job;
@@ -248,32 +249,29 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
     job.opt = opt;
     job.k = lanes_kernels_for(opt->isa);
     if (!job.k || !lanes_isa_supported(opt->isa)) {
-        snprintf(err->message, sizeof err->message, "render: instruction set '%s' is not available",
-                 lanes_isa_name(opt->isa));
-        return false;
+        return lanes_error_set(err, job.k ? LANES_ERR_CPU_LACKS : LANES_ERR_NOT_COMPILED,
+                               "render: instruction set '%s' is not available", lanes_isa_name(opt->isa));
     }
     if (opt->api_accel && opt->scheme != LANES_SCHEME_WIDE) {
-        snprintf(err->message, sizeof err->message, "render: the public API traces the wide scheme only");
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "render: the public API traces the wide scheme only");
     } else if (!opt->api_accel && opt->scheme == LANES_SCHEME_WIDE && accel->wide.width != job.k->wide_width) {
-        snprintf(err->message, sizeof err->message,
-                 "render: the wide scheme at %s needs a %d-wide BVH (have %d)", job.k->name,
-                 job.k->wide_width, accel->wide.width);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "render: the wide scheme at %s needs a %d-wide BVH (have %d)", job.k->name,
+                               job.k->wide_width, accel->wide.width);
     }
     job.width = opt->width > 0 ? opt->width : scene->camera.width;
     job.height = opt->height > 0 ? opt->height : scene->camera.height;
     if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
         opt->spp < 1 || opt->spp > 65536 || opt->max_depth < 0 || opt->max_depth > LANES_MAX_DEPTH) {
-        snprintf(err->message, sizeof err->message,
-                 "render: image size %dx%d, %d samples per pixel or depth %d out of range "
-                 "(1..16384, 1..65536, 0..%d)",
-                 job.width, job.height, opt->spp, opt->max_depth, LANES_MAX_DEPTH);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "render: image size %dx%d, %d samples per pixel or depth %d out of range "
+                               "(1..16384, 1..65536, 0..%d)",
+                               job.width, job.height, opt->spp, opt->max_depth, LANES_MAX_DEPTH);
     }
     if (opt->accuracy < LANES_ACCURACY_FROM_SCENE || opt->accuracy >= LANES_ACCURACY_COUNT) {
-        snprintf(err->message, sizeof err->message, "render: accuracy mode %d unknown", (int)opt->accuracy);
-        return false;
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: accuracy mode %d unknown",
+                               (int)opt->accuracy);
     }
     lanes_scene_plan_make(scene, opt->accuracy, &job.plan);
     job.resolved = *opt;
@@ -286,10 +284,10 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
         lanes_accel_get_info(opt->api_accel, &ai);
         if (strcmp(ai.isa, lanes_isa_name(opt->isa)) != 0 ||
             strcmp(ai.accuracy, lanes_accuracy_name(job.plan.accuracy)) != 0) {
-            snprintf(err->message, sizeof err->message,
-                     "render: the accel traces with %s in %s mode, the render asks for %s in %s mode",
-                     ai.isa, ai.accuracy, lanes_isa_name(opt->isa), lanes_accuracy_name(job.plan.accuracy));
-            return false;
+            return lanes_error_set(
+                err, LANES_ERR_BAD_INPUT,
+                "render: the accel traces with %s in %s mode, the render asks for %s in %s mode", ai.isa,
+                ai.accuracy, lanes_isa_name(opt->isa), lanes_accuracy_name(job.plan.accuracy));
         }
     }
 
@@ -297,8 +295,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
 
     job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
     if (!job.rgb) {
-        snprintf(err->message, sizeof err->message, "render: out of memory for the image");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "render: out of memory for the image");
     }
     job.tiles_x = (job.width + 15) / 16;
     job.tiles_y = (job.height + 15) / 16;
@@ -317,8 +314,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
         free(workers);
         free(job.rgb);
         pthread_mutex_destroy(&job.progress_lock);
-        snprintf(err->message, sizeof err->message, "render: out of memory");
-        return false;
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "render: out of memory");
     }
     double t0 = lanes_render_clock();
     render_loop loop = {&job, workers};
@@ -338,7 +334,7 @@ bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
     out->rgb = job.rgb;
     out->width = job.width;
     out->height = job.height;
-    return true;
+    return LANES_OK;
 }
 
 void lanes_render_result_free(lanes_render_result *r)

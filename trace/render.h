@@ -62,8 +62,8 @@ typedef struct lanes_render_accel {
     lanes_wbvh wide;        /* width == the set's wide_width, or 0 when not built */
 } lanes_render_accel;
 
-bool lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads, lanes_render_accel *a,
-                       lanes_error *err);
+lanes_status lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads,
+                                      lanes_render_accel *a, lanes_error *err);
 void lanes_render_accel_free(lanes_render_accel *a);
 
 /* A public-API accel over the scene's triangles (prim_id = scene triangle
@@ -74,8 +74,8 @@ lanes_status lanes_render_api_accel_create(const lanes_scene *scene, lanes_devic
 /* Monotonic wall time in seconds, the clock both renderers time with. */
 double lanes_render_clock(void);
 
-bool lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
-                  const lanes_render_options *opt, lanes_render_result *out, lanes_error *err);
+lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                          const lanes_render_options *opt, lanes_render_result *out, lanes_error *err);
 void lanes_render_result_free(lanes_render_result *r);
 
 #endif

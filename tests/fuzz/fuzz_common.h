@@ -74,8 +74,8 @@ static inline void fuzz_check_scene(const lanes_scene *s, const char *name)
                            (unsigned)s->material_of[i], s->material_count);
     if (s->camera.width <= 0 || s->camera.height <= 0)
         fuzz_violation("%s: camera size %dx%d", name, s->camera.width, s->camera.height);
-    lanes_error err = {{0}};
-    if (!lanes_scene_validate(s, &err))
+    lanes_error err = {0};
+    if (lanes_scene_validate(s, &err) != LANES_OK)
         fuzz_violation("%s: loaded, but lanes_scene_validate refuses it: %s", name, err.message);
 }
 

@@ -23,8 +23,8 @@ static inline int fuzz_mesh_one(const char *ext, const uint8_t *data, size_t siz
     fuzz_write(path, sizeof path, name, data, size);
 
     lanes_mesh m;
-    lanes_error err = {{0}};
-    if (!lanes_mesh_read(path, &m, &err)) {
+    lanes_error err = {0};
+    if (lanes_mesh_read(path, &m, &err) != LANES_OK) {
         fuzz_check_failure(&err, path);
         return 0;
     }
@@ -33,7 +33,7 @@ static inline int fuzz_mesh_one(const char *ext, const uint8_t *data, size_t siz
 
     lanes_scene s;
     memset(&err, 0, sizeof err);
-    if (lanes_scene_load(path, &s, &err)) {
+    if (lanes_scene_load(path, &s, &err) == LANES_OK) {
         fuzz_check_scene(&s, path);
         lanes_scene_free(&s);
     } else {

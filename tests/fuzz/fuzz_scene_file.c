@@ -138,8 +138,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     static const char name[] = "fuzz.json";
     lanes_scene s;
-    lanes_error err = {{0}};
-    if (lanes_scene_file_parse((const char *)data, size, name, fuzz_dir(), &s, &err)) {
+    lanes_error err = {0};
+    if (lanes_scene_file_parse((const char *)data, size, name, fuzz_dir(), &s, &err) == LANES_OK) {
         fuzz_check_scene(&s, name);
         lanes_scene_free(&s);
     } else {
