@@ -65,13 +65,13 @@ static bool grazing_hit(const lanes_scene *s, const lanes_hit *h, const lanes_ra
 /* Sorts a disagreement between lanes' and Embree's closest hits (for
  * shadow rays: the nearest blockers each engine finds) into a category. */
 void hits_classify(const lanes_scene *s, const lanes_ray *r, const lanes_hit *l, const lanes_hit *e,
-                   hits_differences *a)
+                   hits_differences *d)
 {
     if (l->prim != LANES_NO_HIT && e->prim != LANES_NO_HIT && l->prim != e->prim &&
         fabsf(l->t - e->t) <= 1e-4f * fmaxf(fabsf(l->t), fabsf(e->t)))
-        a->ties++;
+        d->ties++;
     else if (grazing_hit(s, l, r) || grazing_hit(s, e, r))
-        a->grazing++;
+        d->grazing++;
     else
-        a->other++;
+        d->other++;
 }

@@ -63,8 +63,8 @@ lanes_ray *ray_set_camera(const lanes_scene *s, int w, int h, ray_order order, s
     return rays;
 }
 
-surface_point *ray_set_surface_points(const lanes_scene *s, const lanes_ray *rays,
-                                     const lanes_hit *hits, size_t n, size_t *count)
+surface_point *ray_set_surface_points(const lanes_scene *s, const lanes_ray *rays, const lanes_hit *hits,
+                                      size_t n, size_t *count)
 {
     float lo[3], hi[3];
     lanes_scene_bounds(s, lo, hi);
@@ -89,8 +89,7 @@ surface_point *ray_set_surface_points(const lanes_scene *s, const lanes_ray *ray
 /* Towards the first point light, or a point above the scene (along the
  * camera's up) when there is none; only where the light is in front of the
  * surface, as a renderer would cast them. */
-lanes_ray *ray_set_shadow(const lanes_scene *s, const surface_point *pts, size_t n,
-                              size_t *count)
+lanes_ray *ray_set_shadow(const lanes_scene *s, const surface_point *pts, size_t n, size_t *count)
 {
     vec3 light;
     if (s->point_light_count > 0) {

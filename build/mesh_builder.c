@@ -150,8 +150,7 @@ void builder_box(mesh_builder *b, const double lo[3], const double hi[3])
 }
 
 /* Grid over [x0, x1] x [z0, z1] (x0 < x1, z0 < z1) at height y, facing +y. */
-void builder_grid(mesh_builder *b, double x0, double z0, double x1, double z1, double y, int nx,
-                     int nz)
+void builder_grid(mesh_builder *b, double x0, double z0, double x1, double z1, double y, int nx, int nz)
 {
     uint32_t base = (uint32_t)b->m.vertex_count;
     for (int j = 0; j <= nz; j++)

@@ -27,7 +27,7 @@ static bool obj_numbers(mesh_stream *s, const char **cur, obj_kind kind)
             return mesh_fail_line(s, "bad number '%s' in a %s", mesh_tok_str(t, b), what[kind]);
         if (r == NUM_NONFINITE)
             return mesh_fail_line(s, "%s component '%s' is not a finite float", what[kind],
-                             mesh_tok_str(t, b));
+                                  mesh_tok_str(t, b));
         n++;
     }
     bool ok = kind == OBJ_V ? n == 3 || n == 4 || n == 6 : kind == OBJ_VT ? n == 2 || n == 3 : n == 3;
@@ -58,12 +58,12 @@ static bool obj_index(mesh_stream *s, mesh_tok field, mesh_tok whole, obj_ref *r
         return mesh_fail_line(s, "bad %s index in '%s'", ref->what, mesh_tok_str(whole, b));
     if (i == 0)
         return mesh_fail_line(s, "%s index 0 in '%s' (OBJ indices start at 1)", ref->what,
-                         mesh_tok_str(whole, b));
+                              mesh_tok_str(whole, b));
     if (i < 0 && (unsigned long long)(-i) > ref->count)
         return mesh_fail_line(s,
-                         "relative %s index -%llu reaches before the first one (%llu defined "
-                         "so far)",
-                         ref->what, (unsigned long long)(-i), ref->count);
+                              "relative %s index -%llu reaches before the first one (%llu defined "
+                              "so far)",
+                              ref->what, (unsigned long long)(-i), ref->count);
     if (i > 0 && (unsigned long long)i > ref->max) {
         ref->max = (unsigned long long)i;
         ref->max_line = s->line;
@@ -77,7 +77,7 @@ static bool obj_range(mesh_stream *s, const obj_ref *ref)
         return true;
     s->line = ref->max_line;
     return mesh_fail_line(s, "%s index %llu out of range (the file has %llu)", ref->what, ref->max,
-                     ref->count);
+                          ref->count);
 }
 
 bool mesh_check_obj(mesh_stream *s)
@@ -99,8 +99,8 @@ bool mesh_check_obj(mesh_stream *s)
          * or face would be lost, or shift every index after it. */
         if (geometry && kw.p != s->ln)
             return mesh_fail_line(s, "indented '%s' statement (Assimp ignores lines that start with "
-                                "a blank)",
-                             mesh_tok_str(kw, b));
+                                     "a blank)",
+                                  mesh_tok_str(kw, b));
         if (tok_is(kw, "v")) {
             if (!obj_numbers(s, &cur, OBJ_V))
                 return false;

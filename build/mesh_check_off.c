@@ -40,8 +40,8 @@ static int off_body_line(mesh_stream *s, const char **cur, const char *what)
             p++;
         if (!*p || *p == '#') {
             mesh_fail_line(s, "%s inside the %s list (Assimp cannot read OFF files with these; "
-                         "remove the line)",
-                      *p ? "comment" : "line of blanks", what);
+                              "remove the line)",
+                           *p ? "comment" : "line of blanks", what);
             return -1;
         }
         char *hash = strchr(s->ln, '#');
@@ -74,7 +74,7 @@ bool mesh_check_off(mesh_stream *s)
     if (r == 0 || !next_tok(&cur, &t) || !mesh_is_off_keyword(t)) {
         char b[48];
         return mesh_fail_line(s, "not an OFF file: expected 'OFF', found '%s'",
-                         r == 0 ? "end of file" : mesh_tok_str(t, b));
+                              r == 0 ? "end of file" : mesh_tok_str(t, b));
     }
     long long counts[2];
     int have = 0;
@@ -101,7 +101,7 @@ bool mesh_check_off(mesh_stream *s)
         return mesh_fail_line(s, "no faces (a point cloud is not a mesh)");
     if (nf > LANES_SCENE_MAX_TRIANGLES)
         return mesh_fail_line(s, "face count %llu exceeds the limit of %llu", nf,
-                         (unsigned long long)LANES_SCENE_MAX_TRIANGLES);
+                              (unsigned long long)LANES_SCENE_MAX_TRIANGLES);
     for (unsigned long long v = 0; v < nv; v++) {
         r = off_body_line(s, &cur, "vertex");
         if (r < 0)
@@ -125,16 +125,16 @@ bool mesh_check_off(mesh_stream *s)
          * word; refused rather than lost. */
         if (n < 1 || n > MAX_OFF_POLYGON)
             return mesh_fail_line(s, "face with %lld vertices (OFF faces here have 1 to %d)", n,
-                             MAX_OFF_POLYGON);
+                                  MAX_OFF_POLYGON);
         for (long long k = 0; k < n; k++) {
             if (!next_tok(&cur, &t))
                 return mesh_fail_line(s, "face lists %llu of its %llu vertex indices",
-                                 (unsigned long long)k, (unsigned long long)n);
+                                      (unsigned long long)k, (unsigned long long)n);
             if (mesh_parse_uint(t, &i) != NUM_OK)
                 return mesh_fail_line(s, "bad vertex index '%s'", mesh_tok_str(t, b));
             if ((unsigned long long)i >= nv)
                 return mesh_fail_line(s, "vertex index %s out of range (the file has %llu vertices)",
-                                 mesh_tok_str(t, b), nv);
+                                      mesh_tok_str(t, b), nv);
         }
     }
     return true;

@@ -136,7 +136,7 @@ bool mesh_check_ply(mesh_stream *s)
          * two read different encodings (found by fuzz_mesh_ply). */
         if (!have_format && (blank || !tok_is(kw, "format"))) {
             mesh_fail_line(s, "the line after 'ply' must be 'format ascii|binary_little_endian|"
-                         "binary_big_endian 1.0'");
+                              "binary_big_endian 1.0'");
             goto done;
         }
         if (blank)
@@ -153,7 +153,7 @@ bool mesh_check_ply(mesh_stream *s)
             if (!next_tok(&cur, &t) || !next_tok(&cur, &u) || !tok_is(u, "1.0") ||
                 next_tok(&cur, &v)) {
                 mesh_fail_line(s, "expected 'format ascii|binary_little_endian|binary_big_endian "
-                             "1.0'");
+                                  "1.0'");
                 goto done;
             }
             if (tok_is(t, "ascii"))
@@ -190,7 +190,7 @@ bool mesh_check_ply(mesh_stream *s)
              * fuzz_mesh_ply): silently wrong geometry, so refused. */
             if (tok_is(t, "tristrips") && n > 0) {
                 mesh_fail_line(s, "element 'tristrips' is not supported (Assimp 5.2 drops all but "
-                             "the first triangle of the strips); store faces instead");
+                                  "the first triangle of the strips); store faces instead");
                 goto done;
             }
             ply_elem *e = realloc(elems, (size_t)(nelems + 1) * sizeof *e);
@@ -352,7 +352,7 @@ bool mesh_check_ply(mesh_stream *s)
                     if (p->role >= 1 && p->role <= 3 && num != NUM_OK) {
                         if (fmt == PLY_ASCII)
                             mesh_fail_line(s, "vertex coordinate '%s' is not a finite float",
-                                      mesh_tok_str(t, b));
+                                           mesh_tok_str(t, b));
                         else
                             mesh_fail_byte(s, at, "vertex %llu: coordinate is not a finite float", j);
                         goto done;
@@ -360,8 +360,8 @@ bool mesh_check_ply(mesh_stream *s)
                     if (p->role == 4 && !(v >= 0 && v < (double)nv)) {
                         if (fmt == PLY_ASCII)
                             mesh_fail_line(s,
-                                      "vertex index %s out of range (the file has %llu vertices)",
-                                      mesh_tok_str(t, b), nv);
+                                           "vertex index %s out of range (the file has %llu vertices)",
+                                           mesh_tok_str(t, b), nv);
                         else
                             mesh_fail_byte(
                                 s, at,
@@ -376,25 +376,25 @@ bool mesh_check_ply(mesh_stream *s)
                 char b[48];
                 if (next_tok(&c.cur, &t)) {
                     mesh_fail_line(s, "'%s' after the last property of element '%s' %llu (one "
-                                 "element per line)",
-                              mesh_tok_str(t, b), e->name, j);
+                                      "element per line)",
+                                   mesh_tok_str(t, b), e->name, j);
                     goto done;
                 }
             }
             continue;
         short_line:
             mesh_fail_line(s, "element '%s' %llu has fewer values than properties (one element per "
-                         "line)",
-                      e->name, j);
+                              "line)",
+                           e->name, j);
             goto done;
         truncated:
             if (fmt == PLY_ASCII)
                 mesh_fail_line(s, "file ends in element '%s' %llu of %llu (truncated?)", e->name, j,
-                          e->count);
+                               e->count);
             else
                 mesh_fail_byte(s, mesh_offset(s),
-                          "file ends in element '%s' %llu of %llu (truncated?)", e->name, j,
-                          e->count);
+                               "file ends in element '%s' %llu of %llu (truncated?)", e->name, j,
+                               e->count);
             goto done;
         }
     }

@@ -22,7 +22,7 @@ static bool check_stl_binary(mesh_stream *s, unsigned long count)
             memcpy(&f, &w, 4);
             if (!isfinite(f))
                 return mesh_fail_byte(s, at + 4 * (unsigned)k,
-                                 "triangle %lu: vertex coordinate is not finite", i);
+                                      "triangle %lu: vertex coordinate is not finite", i);
         }
     }
     return true;
@@ -97,7 +97,7 @@ static bool check_stl_ascii(mesh_stream *s)
                 return mesh_fail_line(s, "'endloop' without 'outer loop'");
             if (nvert != 3)
                 return mesh_fail_line(s, "facet with %llu vertices (STL facets are triangles)",
-                                 (unsigned long long)nvert);
+                                      (unsigned long long)nvert);
             in_loop = false;
             had_loop = true;
         } else if (tok_is(kw, "endfacet")) {

@@ -116,12 +116,12 @@ int mesh_get_line(mesh_stream *s)
         if (c == '\0' || c == '\r' || c == '\v' || c == '\f') {
             if (c == '\r')
                 mesh_fail_line(s, "carriage return at column %zu (old Mac line endings are not "
-                             "supported)",
-                          i + 1);
+                                  "supported)",
+                               i + 1);
             else
                 mesh_fail_line(s, "control character 0x%02x at column %zu (binary data in a text "
-                             "file?)",
-                          c, i + 1);
+                                  "file?)",
+                               c, i + 1);
             return -1;
         }
     }

@@ -15,7 +15,8 @@ install(FILES ${PROJECT_SOURCE_DIR}/include/lanes/lanes.h
 # The SIMD layer (lanes::simd) and the helper that compiles a project's own
 # sources once per kernel set (lanes_add_kernel_sets, in LanesIsa.cmake).
 # simd/isa.h is internal (CPU features); every other header there is public.
-file(GLOB lanes_simd_backends ${PROJECT_SOURCE_DIR}/simd/vec*.h)
+# CONFIGURE_DEPENDS: a new backend header is installed without a fresh configure.
+file(GLOB lanes_simd_backends CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/simd/vec*.h)
 install(FILES ${PROJECT_SOURCE_DIR}/simd/simd.h ${PROJECT_SOURCE_DIR}/simd/kernel_sets.h
               ${lanes_simd_backends}
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lanes/simd)
