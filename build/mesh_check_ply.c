@@ -106,18 +106,16 @@ static bool ply_same_name(mesh_tok t, const char *stored, size_t size)
     return strlen(stored) == size - 1 && memcmp(t.p, stored, size - 1) == 0;
 }
 
-bool mesh_check_ply(mesh_stream *s)
+/* The header after the 'ply' line, to 'end_header': the format and the
+ * elements with their properties (their roles marked). On failure (message
+ * set) *elems is freed. */
+static bool ply_read_header(mesh_stream *s, ply_format *fmt_out, ply_elem **elems_out, int *nelems_out)
 {
-    int r = mesh_get_line(s);
-    if (r < 0)
-        return false;
-    if (r == 0 || strcmp(s->ln, "ply") != 0)
-        return mesh_fail_line(s, "not a PLY file: the first line must be 'ply'");
     ply_format fmt = PLY_ASCII;
     bool have_format = false;
     ply_elem *elems = NULL;
     int nelems = 0;
-    bool ok = false;
+    int r;
     for (;;) {
         r = mesh_get_line(s);
         if (r < 0)
@@ -256,17 +254,30 @@ bool mesh_check_ply(mesh_stream *s)
         mesh_fail_line(s, "the header has no 'format' line");
         goto done;
     }
+    *fmt_out = fmt;
+    *elems_out = elems;
+    *nelems_out = nelems;
+    return true;
+done:
+    free(elems);
+    return false;
+}
+
+/* The vertex count the header declares, after checking the vertex element
+ * has x, y and z and some element holds faces; 0 (message set) when not. */
+static unsigned long long ply_vertex_count(mesh_stream *s, const ply_elem *elems, int nelems)
+{
     unsigned long long nv = 0;
     bool have_vertex = false, have_faces = false;
     for (int i = 0; i < nelems; i++) {
-        ply_elem *e = &elems[i];
+        const ply_elem *e = &elems[i];
         if (strcmp(e->name, "vertex") == 0) {
             int roles = 0;
             for (int k = 0; k < e->nprops; k++)
                 roles |= e->props[k].role ? 1 << e->props[k].role : 0;
             if ((roles & 14) != 14) {
                 mesh_fail_line(s, "the vertex element lacks x, y or z");
-                goto done;
+                return 0;
             }
             nv = e->count;
             have_vertex = true;
@@ -276,15 +287,25 @@ bool mesh_check_ply(mesh_stream *s)
     }
     if (!have_vertex || nv == 0 || nv > MAX_VERTICES) {
         mesh_fail_line(s, "the header declares %llu vertices (need 1 to %llu)", nv, MAX_VERTICES);
-        goto done;
+        return 0;
     }
     if (!have_faces) {
         mesh_fail_line(s, "the header declares no faces (a point cloud is not a mesh)");
-        goto done;
+        return 0;
     }
+    return nv;
+}
+
+/* The elements' data, as the header declared them: every vertex
+ * coordinate a finite float, every face index below nv, no element cut
+ * short or (ASCII) running on. */
+static bool ply_check_body(mesh_stream *s, ply_format fmt, const ply_elem *elems, int nelems,
+                           unsigned long long nv)
+{
+    int r = 1;
     ply_cursor c = {""};
     for (int i = 0; i < nelems; i++) {
-        ply_elem *e = &elems[i];
+        const ply_elem *e = &elems[i];
         for (unsigned long long j = 0; j < e->count; j++) {
             if (fmt == PLY_ASCII) {
                 r = ply_start_line(s, &c);
@@ -294,7 +315,7 @@ bool mesh_check_ply(mesh_stream *s)
                     goto truncated;
             }
             for (int k = 0; k < e->nprops; k++) {
-                ply_prop *p = &e->props[k];
+                const ply_prop *p = &e->props[k];
                 unsigned long long at = mesh_offset(s);
                 double v;
                 long long n = 1;
@@ -398,8 +419,25 @@ bool mesh_check_ply(mesh_stream *s)
             goto done;
         }
     }
-    ok = true;
+    return true;
 done:
+    return false;
+}
+
+bool mesh_check_ply(mesh_stream *s)
+{
+    int r = mesh_get_line(s);
+    if (r < 0)
+        return false;
+    if (r == 0 || strcmp(s->ln, "ply") != 0)
+        return mesh_fail_line(s, "not a PLY file: the first line must be 'ply'");
+    ply_format fmt;
+    ply_elem *elems;
+    int nelems;
+    if (!ply_read_header(s, &fmt, &elems, &nelems))
+        return false;
+    unsigned long long nv = ply_vertex_count(s, elems, nelems);
+    bool ok = nv > 0 && ply_check_body(s, fmt, elems, nelems, nv);
     free(elems);
     return ok;
 }
