@@ -78,7 +78,7 @@ surface_point *ray_set_surface_points(const lanes_scene *s, const lanes_ray *ray
         const float *v = s->verts + (size_t)hits[i].prim * 9;
         vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
         vec3 p = v3_add(v0, v3_add(v3_scale(e1, hits[i].u), v3_scale(e2, hits[i].v)));
-        vec3 nrm = v3_normalize(v3_cross(e1, e2));
+        vec3 nrm = v3_unit_normal(e1, e2);
         if (v3_dot(nrm, v3_load(rays[i].d)) > 0.0f) nrm = v3_scale(nrm, -1.0f);
         pts[m++] = (surface_point){v3_add(p, v3_scale(nrm, eps)), nrm, (uint32_t)i};
     }

@@ -9,6 +9,17 @@
 #include <stdlib.h>
 #include <string.h>
 
+static bool finite3(const float v[3])
+{
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+static bool within_bound(const float v[3])
+{
+    return fabsf(v[0]) <= LANES_SCENE_MAX_COORD && fabsf(v[1]) <= LANES_SCENE_MAX_COORD &&
+           fabsf(v[2]) <= LANES_SCENE_MAX_COORD;
+}
+
 void lanes_scene_init(lanes_scene *scene)
 {
     memset(scene, 0, sizeof *scene);
@@ -163,6 +174,10 @@ lanes_status lanes_scene_add_material(lanes_scene *scene, const lanes_material *
 
 lanes_status lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_light *l, lanes_error *err)
 {
+    if (finite3(l->position) && !within_bound(l->position))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "point light at (%g, %g, %g): beyond the %g a scene's coordinates may reach",
+                               l->position[0], l->position[1], l->position[2], (double)LANES_SCENE_MAX_COORD);
     void *p = scene->point_lights;
     bool ok = grow(&p, &scene->point_light_capacity, scene->point_light_count + 1, sizeof *l);
     scene->point_lights = p;
@@ -175,6 +190,12 @@ lanes_status lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_l
 
 lanes_status lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_light *l, lanes_error *err)
 {
+    float far[3];
+    for (int a = 0; a < 3; a++) far[a] = fabsf(l->corner[a]) + fabsf(l->edge_u[a]) + fabsf(l->edge_v[a]);
+    if (finite3(far) && !within_bound(far))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "area light at (%g, %g, %g): reaches beyond the %g a scene's coordinates may reach",
+                               l->corner[0], l->corner[1], l->corner[2], (double)LANES_SCENE_MAX_COORD);
     void *p = scene->area_lights;
     bool ok = grow(&p, &scene->area_light_capacity, scene->area_light_count + 1, sizeof *l);
     scene->area_lights = p;
@@ -206,11 +227,6 @@ void lanes_scene_frame_camera(lanes_scene *s)
     }
     k->up[0] = k->up[2] = 0.0f;
     k->up[1] = 1.0f;
-}
-
-static bool finite3(const float v[3])
-{
-    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
 }
 
 static bool color_ok(const float c[3])
@@ -401,6 +417,15 @@ lanes_status lanes_scene_add_mesh(lanes_scene *scene, const lanes_mesh *mesh, co
         if (!finite3(o)) {
             status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: vertex %zu is not finite%s", what, v,
                                      finite3(mesh->positions + 3 * v) ? " after the transform" : "");
+            free(tv);
+            return status;
+        }
+        if (!within_bound(o)) {
+            status = lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                     "%s: vertex %zu lies at (%g, %g, %g)%s, beyond the %g a scene's coordinates "
+                                     "may reach (the renderer squares distances in float)",
+                                     what, v, o[0], o[1], o[2], xf ? " after the transform" : "",
+                                     (double)LANES_SCENE_MAX_COORD);
             free(tv);
             return status;
         }

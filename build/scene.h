@@ -93,6 +93,19 @@ typedef struct lanes_scene {
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
 #define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
 
+/* The loaders keep |coordinate| <= LANES_SCENE_MAX_COORD, for what the
+ * renderer computes from coordinates: a light's falloff squares a distance
+ * of up to 2e18 * sqrt(3), 1.2e37, inside float's 3.4e38; past the bound
+ * such products overflow to infinity (black surfaces, lights that vanish).
+ * lanes_scene_add_mesh (every object of a scene file, every mesh file) and
+ * the lights refuse coordinates beyond it with the object's name.
+ * lanes_scene_add_triangle, the container's raw append, does not check:
+ * the kernel tests feed it extreme coordinates on purpose, and the kernels
+ * handle any finite ones. Precision is another limit, not checked here: an
+ * object far from the origin (a unit sphere at 1e17) has coordinates float
+ * cannot tell apart. */
+#define LANES_SCENE_MAX_COORD 1e18f
+
 /* An empty scene: no arrays, a camera at (0,0,5) looking at the origin, 45
  * degrees, 512x512 (the thesis' image size). */
 void lanes_scene_init(lanes_scene *scene);

@@ -33,4 +33,38 @@ static inline vec3 v3_normalize(vec3 a)
 }
 static inline vec3 v3_abs(vec3 a) { return v3(fabsf(a.x), fabsf(a.y), fabsf(a.z)); }
 
+/* The unit normal of the plane spanned by edges a and b (a x b, normalized)
+ * and, in *area, |a x b| (twice the triangle's area, or the parallelogram's),
+ * at any scale: the edges are first scaled by the power of two that brings
+ * their largest component into [0.5, 1). The cross product squares the
+ * edges and its length squares them again, so unscaled it overflows past
+ * edges of about 2^31 (4e9 units: a black surface, an infinite light) and
+ * underflows below about 2^-31; scaled, neither can happen, and *area is
+ * exact up to its own range. A power of two scales exactly, so wherever the
+ * unscaled form was finite this gives the same bits. A degenerate or
+ * non-finite pair gives (0,0,0) and area 0. */
+static inline vec3 v3_unit_normal_area(vec3 a, vec3 b, float *area)
+{
+    float big = fmaxf(fmaxf(fmaxf(fabsf(a.x), fabsf(a.y)), fmaxf(fabsf(a.z), fabsf(b.x))),
+                      fmaxf(fabsf(b.y), fabsf(b.z)));
+    *area = 0.0f;
+    if (!(big > 0.0f) || !isfinite(big)) return v3(0.0f, 0.0f, 0.0f);
+    int e;
+    frexpf(big, &e);
+    /* s itself must be a normal float: a subnormal one is zero under DAZ */
+    e = e > 125 ? 125 : e < -125 ? -125 : e;
+    float s = ldexpf(1.0f, -e);
+    vec3 n = v3_cross(v3_scale(a, s), v3_scale(b, s));
+    float l = sqrtf(v3_dot(n, n));
+    if (!(l > 0.0f)) return v3(0.0f, 0.0f, 0.0f);
+    *area = ldexpf(l, 2 * e);
+    return v3_scale(n, 1.0f / l);
+}
+
+static inline vec3 v3_unit_normal(vec3 a, vec3 b)
+{
+    float area;
+    return v3_unit_normal_area(a, b, &area);
+}
+
 #endif

@@ -22,6 +22,18 @@ add_test(NAME render.bad_accuracy
   COMMAND bash -c "\"$0\" render -o \"$1\" --accuracy exact; test $? -eq 2"
           $<TARGET_FILE:lanes_cli> ${lanes_render_dir}/bad.png)
 set_tests_properties(render.bad_accuracy PROPERTIES LABELS render TIMEOUT 60)
+# The same scene at unit scale and scaled by 1e10 renders the same image
+# (idiff, OpenImageIO's comparison): geometric normals and light areas are
+# computed scale-safe (build/vec3.h, v3_unit_normal_area). Before, every
+# surface of the 1e10 scene was black: normalizing a cross product squares
+# the edges twice, and (1e10)^4 overflows a float.
+find_program(LANES_IDIFF idiff REQUIRED)
+add_test(NAME render.scale_1e10
+  COMMAND bash -c "\"$0\" render \"$2/scale_1.json\" -o \"$3/scale_1.exr\" --size 64x64 &&
+                   \"$0\" render \"$2/scale_1e10.json\" -o \"$3/scale_1e10.exr\" --size 64x64 &&
+                   \"$1\" -fail 0.02 \"$3/scale_1.exr\" \"$3/scale_1e10.exr\""
+          $<TARGET_FILE:lanes_cli> ${LANES_IDIFF} ${CMAKE_CURRENT_LIST_DIR}/data/scenes/ok ${lanes_render_dir})
+set_tests_properties(render.scale_1e10 PROPERTIES LABELS render TIMEOUT 120)
 set_tests_properties(render.isa PROPERTIES
   LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77
   ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")

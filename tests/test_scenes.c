@@ -30,6 +30,7 @@
 #include "build/scene_file.h"
 #include "build/scene_load.h"
 #include "build/scenes_builtin.h"
+#include "build/vec3.h"
 #include "tests/harness.h"
 
 static const char *g_data, *g_scratch;
@@ -767,6 +768,59 @@ static void test_scene_files(void)
         CHECK(s.triangle_count == 2, "inline scene");
         lanes_scene_free(&s);
     }
+
+    /* Coordinates beyond LANES_SCENE_MAX_COORD are refused, naming the
+     * object or the light; up to it they load. */
+    static const struct {
+        const char *what, *object, *light;
+        bool loads;
+    } far[] = {
+        {"sphere at 1e38", "{\"builtin\": \"sphere\", \"name\": \"ball\", \"material\": \"m\", \"translate\": [1e38, 0, 0]}",
+         "", false},
+        {"sphere scaled to 1e19", "{\"builtin\": \"sphere\", \"name\": \"ball\", \"material\": \"m\", \"scale\": 1e19}", "",
+         false},
+        {"sphere at 1e17", "{\"builtin\": \"sphere\", \"name\": \"ball\", \"material\": \"m\", \"translate\": [1e17, 0, 0]}",
+         "", true},
+        {"point light at 1e30", "{\"builtin\": \"box\", \"name\": \"ball\", \"material\": \"m\"}",
+         ", \"lights\": [{\"type\": \"point\", \"position\": [0, 1e30, 0], \"intensity\": 1}]", false},
+    };
+    for (size_t i = 0; i < sizeof far / sizeof far[0]; i++) {
+        char scene_text[512];
+        snprintf(scene_text, sizeof scene_text, "{\"materials\": {\"m\": {\"type\": \"diffuse\"}}, \"objects\": [%s]%s}",
+                 far[i].object, far[i].light);
+        lanes_status st = lanes_scene_file_parse(scene_text, strlen(scene_text), "far.json", NULL, &s, &err);
+        if (far[i].loads) {
+            if (CHECK(st == LANES_OK, "%s: %s", far[i].what, err.message)) lanes_scene_free(&s);
+        } else {
+            bool named = strstr(err.message, far[i].light[0] ? "point light" : "ball") != NULL;
+            CHECK(st == LANES_ERR_BAD_INPUT && named && strstr(err.message, "1e+18") && strstr(err.message, "far.json"),
+                  "%s: %s", far[i].what, st == LANES_OK ? "loaded" : err.message);
+            if (st == LANES_OK) lanes_scene_free(&s);
+        }
+    }
+}
+
+/* The geometric normal at every scale: edges scaled by 2^k give the same
+ * unit normal, bit for bit, and a finite one (normalizing the cross product
+ * directly overflows past |k| of about 31). */
+static void test_unit_normal(void)
+{
+    const vec3 e1 = v3(0.3f, -1.7f, 0.25f), e2 = v3(-0.9f, 0.4f, 1.1f);
+    float area1;
+    const vec3 n1 = v3_unit_normal_area(e1, e2, &area1);
+    CHECK(fabsf(v3_dot(n1, n1) - 1.0f) < 1e-6f && area1 > 0.0f, "unit normal of unit edges");
+    for (int k = -120; k <= 120; k += 4) {
+        float s = ldexpf(1.0f, k), area;
+        vec3 n = v3_unit_normal_area(v3_scale(e1, s), v3_scale(e2, s), &area);
+        CHECK(n.x == n1.x && n.y == n1.y && n.z == n1.z, "edges scaled by 2^%d: normal (%g, %g, %g), want (%g, %g, %g)",
+              k, n.x, n.y, n.z, n1.x, n1.y, n1.z);
+        /* the area scales by 2^2k while it stays a normal float */
+        if (2 * k > -126 && 2 * k < 127)
+            CHECK(area == ldexpf(area1, 2 * k), "edges scaled by 2^%d: area %g, want %g", k, area, ldexpf(area1, 2 * k));
+    }
+    float area;
+    vec3 z = v3_unit_normal_area(e1, v3_scale(e1, 2.0f), &area);
+    CHECK(z.x == 0.0f && z.y == 0.0f && z.z == 0.0f && area == 0.0f, "parallel edges: no normal");
 }
 
 /* ---- lanes_scene_load ---- */
@@ -987,6 +1041,7 @@ int main(int argc, char **argv)
         test_mesh_formats();
         test_generators();
         test_scene_files();
+        test_unit_normal();
         test_load();
         test_corpus();
         test_builtins(false);

@@ -50,7 +50,7 @@ static inline lanes_surface lanes_surface_at(const lanes_scene *s, const lanes_h
     lanes_surface sf;
     const float *v = s->verts + (size_t)h->prim * 9;
     vec3 v0 = v3_load(v), e1 = v3_sub(v3_load(v + 3), v0), e2 = v3_sub(v3_load(v + 6), v0);
-    vec3 n = v3_normalize(v3_cross(e1, e2));
+    vec3 n = v3_unit_normal(e1, e2);
     vec3 ue1 = v3_scale(e1, h->u), ve2 = v3_scale(e2, h->v);
     sf.p = v3_add(v0, v3_add(ue1, ve2));
     /* Whatever error u and v carry, any v0 + u e1 + v e2 lies in the
@@ -139,10 +139,9 @@ static inline int lanes_diffuse_light(const lanes_scene *s, const lanes_surface 
     for (size_t i = 0; i < s->area_light_count && area_samples > 0; i++) {
         const lanes_area_light *al = &s->area_lights[i];
         vec3 eu = v3_load(al->edge_u), ev = v3_load(al->edge_v);
-        vec3 ln = v3_cross(eu, ev);
-        float area = sqrtf(v3_dot(ln, ln));
+        float area;
+        vec3 ln = v3_unit_normal_area(eu, ev, &area);
         if (!(area > 0.0f)) continue;
-        ln = v3_scale(ln, 1.0f / area);
         for (int k = 0; k < area_samples; k++) {
             float a = lanes_hash01(seed, (uint32_t)(2 * k), (uint32_t)i);
             float b = lanes_hash01(seed, (uint32_t)(2 * k + 1), (uint32_t)i);
