@@ -460,12 +460,15 @@ lanes_status acc_world_build(acc_world *w, const char *name, const lanes_mesh *m
     w->eps = lanes_scene_epsilon(&w->scene);
 
     lanes_render_accel accel;
-    if ((status = lanes_render_accel_build(&w->scene, 0, threads, &accel, err)) != LANES_OK) goto fail;
+    if ((status = lanes_render_accel_build(&w->scene, NULL, true, threads, &accel, err)) != LANES_OK) goto fail;
     w->bvh2 = accel.bvh2;
     static const int widths[3] = {4, 8, 16};
+    lanes_bvh_build_options bo;
+    lanes_bvh_default_options(&bo);
+    bo.threads = threads;
     for (int i = 0; i < 3; i++)
         if ((width_mask & acc_width_bit(widths[i])) &&
-            (status = lanes_wbvh_from_bvh2(&w->bvh2, widths[i], &w->wide[i], err)) != LANES_OK)
+            (status = lanes_wbvh_build(&w->scene, widths[i], &bo, &w->wide[i], err)) != LANES_OK)
             goto fail;
     if ((status = acc_ref_init(&w->ref, &w->bvh2, &w->scene, err)) != LANES_OK) goto fail;
 
@@ -694,7 +697,7 @@ static void trace_chunk(const measure_ctx *c, worker_state *ws, lanes_ray *rays,
     const lanes_kernels *k = c->job->k;
     lanes_accuracy mode = c->job->mode;
     if (via == ACC_VIA_WIDE) {
-        k->trace_wide(c->wide, &c->w->bvh2, mode, rays, n, hits, NULL);
+        k->trace_wide(c->wide, mode, rays, n, hits, NULL);
         return;
     }
     if (via == ACC_VIA_BVH2) {
@@ -878,7 +881,7 @@ double acc_time_wide(const acc_world *w, const lanes_kernels *k, lanes_accuracy 
     }
     for (int i = 0; i < reps; i++) {
         double t0 = now_seconds();
-        k->trace_wide(wide, &w->bvh2, mode, r, rays, h, NULL);
+        k->trace_wide(wide, mode, r, rays, h, NULL);
         t[i] = now_seconds() - t0;
     }
     qsort(t, (size_t)reps, sizeof t[0], cmp_double);

@@ -170,14 +170,14 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     }
     if (j->occlusion) {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->occluded_wide(j->wide, j->bvh2, j->accuracy, j->rays + b, e - b,
+            j->k->occluded_wide(j->wide, j->accuracy, j->rays + b, e - b,
                                 j->occluded + b, NULL);
         else
             j->k->occluded_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->occluded + b,
                                 NULL);
     } else {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->trace_wide(j->wide, j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b,
+            j->k->trace_wide(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b,
                              NULL);
         else
             j->k->trace_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
@@ -431,7 +431,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             } else {
                 /* the blockers behind the two answers, one ray each */
                 lanes_hit lh, eh;
-                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.bvh2, cfg[i].lj.accuracy, &cfg[i].lj.rays[r], 1,
+                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.accuracy, &cfg[i].lj.rays[r], 1,
                                         &lh, NULL);
                 lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
                 hits_classify(&c->scene, &rays[r], &lh, &eh, &a->differ);
@@ -496,8 +496,13 @@ static void print_json(const compare *c, double embree_build)
     printf("},\n  \"build_seconds\": {\"lanes_bvh2\": %.6f", c->bvh2.build_seconds);
     for (int s = 0; s < 3; s++)
         if (c->wide[s].width)
-            printf(", \"lanes_collapse_%d\": %.6f", c->wide[s].width, c->wide[s].collapse_seconds);
-    printf(", \"embree\": %.6f},\n  \"rows\": [\n", embree_build);
+            printf(", \"lanes_wide_%d\": %.6f", c->wide[s].width, c->wide[s].build_seconds);
+    printf(", \"embree\": %.6f},\n  \"bytes_per_triangle\": {", embree_build);
+    double tris = (double)c->scene.triangle_count;
+    for (int s = 0; s < 3; s++)
+        if (c->wide[s].width)
+            printf("\"lanes_wide_%d\": %.2f, ", c->wide[s].width, (double)lanes_wbvh_bytes(&c->wide[s]) / tris);
+    printf("\"embree\": %.2f},\n  \"rows\": [\n", lanes_embree_bvh_bytes(c->embree) / tris);
     for (size_t i = 0; i < c->res.count; i++) {
         const row *w = &c->res.rows[i];
         printf("    {\"rays\": \"%s\", \"engine\": \"%s\", \"method\": ", kind_names[w->kind],
@@ -681,7 +686,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     for (int i = 0; i < c->isa_count; i++)
         need[width_slot(lanes_kernels_for(c->isas[i])->wide_width)] = true;
     for (int s = 0; s < 3; s++)
-        if (need[s] && lanes_wbvh_from_bvh2(&c->bvh2, 4 << s, &c->wide[s], &err) != LANES_OK)
+        if (need[s] && lanes_wbvh_build(&c->scene, 4 << s, &bo, &c->wide[s], &err) != LANES_OK)
             cli_fail("compare: %s", err.message);
     if (lanes_embree_create(&c->scene, o->embree_isa, o->threads, &c->embree, &err) != LANES_OK)
         cli_fail("compare: %s", err.message);
@@ -690,14 +695,24 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         printf("build:    lanes BVH2 %.2f ms", c->bvh2.build_seconds * 1e3);
         for (int s = 0; s < 3; s++)
             if (c->wide[s].width)
-                printf(", collapse to %d %.2f ms", c->wide[s].width, c->wide[s].collapse_seconds * 1e3);
+                printf(", %d-wide %.2f ms", c->wide[s].width, c->wide[s].build_seconds * 1e3);
         printf("; Embree commit %.2f ms (%d thread%s)\n", eb * 1e3, o->threads,
                o->threads == 1 ? "" : "s");
         printf("          lanes/Embree build time:");
         for (int s = 0; s < 3; s++)
             if (c->wide[s].width)
-                printf(" %.2f (BVH2 + %d-wide)", (c->bvh2.build_seconds + c->wide[s].collapse_seconds) / eb,
+                printf(" %.2f (%d-wide)", c->wide[s].build_seconds / eb,
                        c->wide[s].width);
+        printf("\n");
+        double tris = (double)c->scene.triangle_count;
+        printf("memory:   Embree BVH %.1f B/triangle", lanes_embree_bvh_bytes(c->embree) / tris);
+        for (int s = 0; s < 3; s++) {
+            lanes_bvh_stats st;
+            if (!c->wide[s].width || !lanes_wbvh_stats(&c->wide[s], 1.0f, 1.0f, &st)) continue;
+            printf("; lanes %d-wide %.1f B/triangle (%.2fx), %.1f children/node, leaf blocks %.0f%% full",
+                   c->wide[s].width, (double)st.bytes / tris, (double)st.bytes / lanes_embree_bvh_bytes(c->embree),
+                   st.avg_children, 100.0 * st.block_fill);
+        }
         printf("\n");
         fflush(stdout);
     }

@@ -140,7 +140,8 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
         }
         po.base.api_accel = api_accel;
     } else if (lanes_render_accel_build(&scene,
-                                        packets || single_scheme == LANES_SCHEME_SINGLE ? 0 : k->wide_width,
+                                        packets || single_scheme == LANES_SCHEME_SINGLE ? NULL : k,
+                                        packets || single_scheme == LANES_SCHEME_SINGLE,
                                         po.base.threads, &accel, &err) != LANES_OK) {
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);

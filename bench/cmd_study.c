@@ -805,13 +805,14 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         snprintf(scenes[s], sizeof scenes[s], "%.63s", scene.name);
         lanes_render_accel accel4 = {0}, accel8 = {0}, accel16 = {0};
         lanes_render_accel *by_width[17] = {0};
-        /* the BVH2 is shared; each wide width gets its own collapse */
-        if (lanes_render_accel_build(&scene, 0, 0, &accel4, &err) != LANES_OK) cli_fail("%s", err.message);
+        /* the BVH2 (single ray, packets) is shared; each wide width gets its
+         * own build */
+        if (lanes_render_accel_build(&scene, NULL, true, 0, &accel4, &err) != LANES_OK) cli_fail("%s", err.message);
         accel8.bvh2 = accel4.bvh2;
         accel16.bvh2 = accel4.bvh2;
-        if (lanes_wbvh_from_bvh2(&accel4.bvh2, 4, &accel4.wide, &err) != LANES_OK ||
-            lanes_wbvh_from_bvh2(&accel4.bvh2, 8, &accel8.wide, &err) != LANES_OK ||
-            lanes_wbvh_from_bvh2(&accel4.bvh2, 16, &accel16.wide, &err) != LANES_OK)
+        if (lanes_wbvh_build(&scene, 4, NULL, &accel4.wide, &err) != LANES_OK ||
+            lanes_wbvh_build(&scene, 8, NULL, &accel8.wide, &err) != LANES_OK ||
+            lanes_wbvh_build(&scene, 16, NULL, &accel16.wide, &err) != LANES_OK)
             cli_fail("%s", err.message);
         by_width[4] = &accel4, by_width[8] = &accel8, by_width[16] = &accel16;
 

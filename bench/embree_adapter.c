@@ -100,6 +100,8 @@ struct lanes_embree {
     RTCScene scene;
     lanes_embree_isa isa;
     double build_seconds;
+    long long bytes_now;    /* Embree's own count, through its memory monitor */
+    long long bvh_bytes;    /* what rtcCommitScene added: the BVH and its leaves */
     bool native[LANES_EMBREE_METHOD_COUNT];
     char error[256];
 };
@@ -109,6 +111,16 @@ static void on_error(void *user, enum RTCError code, const char *str)
     lanes_embree *e = user;
     if (e->error[0] == '\0')
         snprintf(e->error, sizeof e->error, "Embree error %d: %s", (int)code, str ? str : "");
+}
+
+/* Embree reports every allocation and release; the build's net is the
+ * memory its BVH keeps. */
+static bool on_memory(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    lanes_embree *e = user;
+    e->bytes_now += (long long)bytes;
+    return true;
 }
 
 static double now_seconds(void)
@@ -150,6 +162,7 @@ lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa,
         return status;
     }
     rtcSetDeviceErrorFunction(e->device, on_error, e);
+    rtcSetDeviceMemoryMonitorFunction(e->device, on_memory, e);
     e->native[LANES_EMBREE_1] = true;
     e->native[LANES_EMBREE_4] = rtcGetDeviceProperty(e->device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) != 0;
     e->native[LANES_EMBREE_8] = rtcGetDeviceProperty(e->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
@@ -181,9 +194,11 @@ lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa,
     rtcReleaseGeometry(g);
 
     unsigned csr = lanes_fp_fast_enter();
+    long long before = e->bytes_now;
     double t0 = now_seconds();
     rtcCommitScene(e->scene);
     e->build_seconds = now_seconds() - t0;
+    e->bvh_bytes = e->bytes_now - before;
     lanes_fp_restore(csr);
     if (e->error[0]) {
         status = lanes_error_set(err, LANES_ERR_BAD_INPUT, "embree: building the scene: %s", e->error);
@@ -203,6 +218,7 @@ void lanes_embree_destroy(lanes_embree *e)
 }
 
 double lanes_embree_build_seconds(const lanes_embree *e) { return e->build_seconds; }
+double lanes_embree_bvh_bytes(const lanes_embree *e) { return (double)e->bvh_bytes; }
 lanes_embree_isa lanes_embree_get_isa(const lanes_embree *e) { return e->isa; }
 const char *lanes_embree_error(const lanes_embree *e) { return e->error; }
 

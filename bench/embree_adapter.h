@@ -63,6 +63,9 @@ lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa,
                                  lanes_embree **out, lanes_error *err);
 void lanes_embree_destroy(lanes_embree *e);
 double lanes_embree_build_seconds(const lanes_embree *e);
+/* Bytes the scene build kept (its memory monitor's net over rtcCommitScene):
+ * the BVH with its triangle leaves, not the vertex and index buffers. */
+double lanes_embree_bvh_bytes(const lanes_embree *e);
 lanes_embree_isa lanes_embree_get_isa(const lanes_embree *e);
 /* Whether this device runs the method natively (Embree reports an error
  * for rtcIntersect8 on an SSE device, for example). */

@@ -1,8 +1,11 @@
 /* Accuracy modes: what a user trades between speed and exactness.
  *
  *   fast     approximate reciprocal directions (hardware estimate plus one
- *            Newton step), Möller–Trumbore, box exits not widened, secondary
- *            origins pushed off the surface by the scene epsilon.
+ *            Newton step), Möller–Trumbore, box slabs in the wide traversal
+ *            as one FMA on the ray's precomputed o * (1/d) (whose rounding
+ *            grows with |o|: far from the origin it loses a few more boxes a
+ *            ray grazes), box exits not widened, secondary origins pushed off
+ *            the surface by the scene epsilon.
  *   default  exact reciprocals (division), Möller–Trumbore, box exits not
  *            widened, the scene epsilon. Epsilon policy: a triangle is hit
  *            iff its determinant is not exactly 0 and tnear <= t <= tfar, with

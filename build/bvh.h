@@ -41,18 +41,22 @@ typedef struct lanes_bvh2 {
     /* The build options' costs, kept so the collapse and the reports use
      * the same cost model as the build. */
     float traversal_cost, intersect_cost;
+    int sah_block;
     int threads;            /* threads the build ran on */
 } lanes_bvh2;
 
 typedef struct lanes_bvh_build_options {
     int bins;               /* SAH bins per axis (default 16) */
-    int max_leaf_size;      /* default 4; leaves never exceed it unless all centroids coincide */
+    int max_leaf_size;      /* default 4 */
+    int sah_block;          /* default 1: the SAH charges intersect_cost per block of this
+                             * many triangles (ceil(n / sah_block) for a leaf of n), the
+                             * cost of a kernel that tests a block at once */
     float traversal_cost;   /* default 1.0 */
     float intersect_cost;   /* default 1.0 */
     int threads;            /* 0: all cores */
 } lanes_bvh_build_options;
-/* Valid options: 2 <= bins <= 256, max_leaf_size >= 1, finite costs >= 0,
- * threads >= 0. The tree is the same for every thread count. */
+/* Valid options: 2 <= bins <= 256, max_leaf_size >= 1, 1 <= sah_block <= 64,
+ * finite costs >= 0, threads >= 0. The tree is the same for every thread count. */
 
 void lanes_bvh_default_options(lanes_bvh_build_options *o);
 
@@ -63,25 +67,65 @@ lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_op
                               lanes_error *err);
 void lanes_bvh2_free(lanes_bvh2 *bvh);
 
-/* Wide BVH of `width` children (4, 8 or 16). Node i's child bounds are SoA:
- * bounds + (i * 6 + p) * width holds plane p (minx, miny, minz, maxx, maxy,
- * maxz) of its `width` children, 64-byte aligned, so a kernel of that width
- * loads one plane with one aligned load. Empty child slots have
- * min = +inf, max = -inf (never hit). child[i * width + j]: for an interior
- * child, its node index; for a leaf, the first triangle (in the BVH2's leaf
- * order) with count[i * width + j] > 0 triangles; count is 0 for an interior
- * child and for an empty slot (child = LANES_WBVH_EMPTY). */
+/* Wide BVH of `width` children (4, 8 or 16), every node and every leaf one
+ * contiguous block that a kernel of that width loads with aligned loads, and
+ * nothing shared with the BVH2 it was collapsed from (which may be freed).
+ *
+ * Node i is lanes_wnode_bytes(width) bytes at nodes + i * that, 64-byte
+ * aligned: float bounds[6][width] (plane p = minx, miny, minz, maxx, maxy,
+ * maxz of child j at [p][j]) then uint32_t ref[width]. Empty slots have
+ * min = +inf, max = -inf (never hit) and ref LANES_WBVH_EMPTY. An interior
+ * child's ref is its node index; a leaf's is LANES_WREF_LEAF | first block
+ * << 4 | (blocks - 1).
+ *
+ * Leaf block b is lanes_wblock_bytes(width) bytes at blocks + b * that:
+ * float v[9][width] (v0x v0y v0z v1x v1y v1z v2x v2y v2z of triangle j at
+ * [c][j]) then uint32_t prim[width], the scene triangle index. A leaf of n
+ * triangles fills ceil(n / width) consecutive blocks in the BVH2's leaf
+ * order; the lanes past n have prim LANES_NO_HIT and NaN vertices, and a
+ * triangle of no area (its edges' cross product exactly zero, the test the
+ * kernels would otherwise repeat per ray) keeps its prim but gets NaN
+ * vertices: a NaN is a miss in every triangle test. Vertices are stored,
+ * not edges: the watertight test needs each shared vertex exactly. */
 #define LANES_WBVH_EMPTY 0xffffffffu
+#define LANES_WREF_LEAF 0x80000000u
+#define LANES_WBVH_MAX_BLOCKS ((1u << 27) - 1u) /* blocks a tree may hold */
+#define LANES_WLEAF_MAX_BLOCKS 16u              /* blocks one leaf may span */
 
 typedef struct lanes_wbvh {
     int width;
-    float *bounds;
-    uint32_t *child;
-    uint32_t *count;
+    unsigned char *nodes;
     size_t node_count;      /* node 0 is the root */
+    unsigned char *blocks;
+    size_t block_count;
+    size_t prim_count;      /* triangles in the leaves (padding lanes not counted) */
+    size_t skipped;         /* scene triangles left out (as lanes_bvh2.skipped) */
+    double build_seconds;   /* lanes_wbvh_build: BVH2 and collapse; else the collapse */
     double collapse_seconds;
     double sah_cost;        /* with the BVH2's costs */
 } lanes_wbvh;
+
+static inline size_t lanes_wnode_bytes(int width) { return ((size_t)width * 28 + 63) / 64 * 64; }
+static inline size_t lanes_wblock_bytes(int width) { return ((size_t)width * 40 + 31) / 32 * 32; }
+static inline bool lanes_wref_is_leaf(uint32_t ref) { return ref != LANES_WBVH_EMPTY && (ref & LANES_WREF_LEAF); }
+static inline uint32_t lanes_wref_block(uint32_t ref) { return (ref & ~LANES_WREF_LEAF) >> 4; }
+static inline uint32_t lanes_wref_blocks(uint32_t ref) { return (ref & 15u) + 1u; }
+static inline const float *lanes_wnode_bounds(const lanes_wbvh *w, size_t node)
+{
+    return (const float *)(const void *)(w->nodes + node * lanes_wnode_bytes(w->width));
+}
+static inline const uint32_t *lanes_wnode_refs(const lanes_wbvh *w, size_t node)
+{
+    return (const uint32_t *)(const void *)(lanes_wnode_bounds(w, node) + 6 * w->width);
+}
+static inline const float *lanes_wblock_verts(const lanes_wbvh *w, size_t block)
+{
+    return (const float *)(const void *)(w->blocks + block * lanes_wblock_bytes(w->width));
+}
+static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t block)
+{
+    return (const uint32_t *)(const void *)(lanes_wblock_verts(w, block) + 9 * w->width);
+}
 
 /* Collapses by repeatedly replacing the child with the largest surface area
  * by its own children until `width` are present (SAH-guided collapse).
@@ -90,22 +134,32 @@ typedef struct lanes_wbvh {
  * BVH2's left-to-right order, and empty slots come last. The interior
  * children of a wide node have consecutive indices, greater than its own;
  * the root is node 0. A BVH2 whose root is a leaf gives one wide node
- * holding that leaf in slot 0. */
+ * holding that leaf in slot 0. Fails on a leaf that would span more than
+ * LANES_WLEAF_MAX_BLOCKS blocks (max_leaf_size above 16 * width). */
 lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err);
 void lanes_wbvh_free(lanes_wbvh *w);
 
+/* The wide BVH the kernel sets of node width `width` traverse, built for
+ * it from the scene: a BVH2 whose leaves fill at most one block of `width`
+ * and whose SAH charges a leaf per block (one vector step for a set of that
+ * many lanes; the scalar set loops over its 4-wide blocks), collapsed, then
+ * freed. base gives the other options (bins, costs, threads; NULL: the
+ * defaults). build_seconds covers both steps. */
+lanes_status lanes_wbvh_build(const lanes_scene *scene, int width, const lanes_bvh_build_options *base,
+                              lanes_wbvh *out, lanes_error *err);
+
 /* Memory in bytes, for reports. The BVH2 counts its nodes, prim_index and
- * triangle arrays; the wide BVH its bounds, child and count arrays (its
- * leaves point into the BVH2's triangles). */
+ * triangle arrays; the wide BVH its nodes and leaf blocks. */
 size_t lanes_bvh2_bytes(const lanes_bvh2 *bvh);
 size_t lanes_wbvh_bytes(const lanes_wbvh *w);
 
 /* The SAH cost model of sah_cost, for both kinds of tree:
  *   cost = sum over interior nodes n of  traversal_cost * A(n) / A(root)
- *        + sum over leaves l of  intersect_cost * count(l) * A(l) / A(root)
- * with A the surface area of the node's box. A wide node costs one
- * traversal_cost (one vector step tests all its children); its box is the
- * union of its children's; its leaves are its leaf child slots. A root of
+ *        + sum over leaves l of  intersect_cost * blocks(l) * A(l) / A(root)
+ * with A the surface area of the node's box; blocks(l) is ceil(count(l) /
+ * sah_block) for the BVH2 and the leaf's blocks for a wide BVH. A wide node
+ * costs one traversal_cost (one vector step tests all its children); its box
+ * is the union of its children's; its leaves are its leaf child slots. A root of
  * zero area gives cost 0. Sums in double. */
 double lanes_bvh2_sah(const lanes_bvh2 *bvh, float traversal_cost, float intersect_cost);
 double lanes_wbvh_sah(const lanes_wbvh *w, float traversal_cost, float intersect_cost);
@@ -119,6 +173,8 @@ typedef struct lanes_bvh_stats {
     double avg_leaf_size;
     size_t max_leaf_size;
     double avg_children;    /* wide only: non-empty slots per node */
+    size_t blocks;          /* wide only: leaf blocks */
+    double block_fill;      /* wide only: prims / (blocks * width) */
     int depth;              /* BVH2: nodes on the longest root-to-leaf path, leaf
                              * included; wide: wide nodes on the longest path */
     double sah_cost;        /* with the costs passed in */

@@ -222,12 +222,15 @@ typedef struct split {
     float cost;      /* nL * A(L) + nR * A(R), half areas */
 } split;
 
+/* Leaf cost units of n triangles: blocks of `block` (1: per triangle). */
+static inline uint32_t sah_blocks(uint32_t n, uint32_t block) { return (n + block - 1) / block; }
+
 /* Best SAH split over the usable axes; false when every candidate leaves a
  * side empty or costs infinity (boxes too large to measure in float). The
  * sweeps skip empty bins: a small node fills few of them, and splitting
  * anywhere between two filled bins gives the same partition. The first
  * minimum wins, axis by axis, so the choice is deterministic. */
-static bool find_split(const binner *bn, const bin *bins, split *out)
+static bool find_split(const binner *bn, const bin *bins, uint32_t block, split *out)
 {
     const int K = bn->bins;
     float rarea[MAX_BINS];
@@ -259,7 +262,7 @@ static bool find_split(const binner *bn, const bin *bins, split *out)
         for (int t = 1; t < m; t++) {
             if (t > 1) aabb_merge(&acc, &b[used[t - 1]].b);
             n += b[used[t - 1]].n;
-            float cost = (float)n * half_area(&acc) + (float)rcount[t] * rarea[t];
+            float cost = (float)sah_blocks(n, block) * half_area(&acc) + (float)sah_blocks(rcount[t], block) * rarea[t];
             if (cost < best) {
                 best = cost;
                 out->axis = a;
@@ -328,6 +331,7 @@ typedef struct tblock {
 typedef struct builder {
     const lanes_scene *scene;
     int bins, maxleaf;
+    uint32_t block;          /* SAH leaf cost per block of this many triangles */
     float ct, ci;
     uint32_t task_size;
     size_t ntri, nprims;     /* scene triangles; those kept */
@@ -513,7 +517,7 @@ static bool prefer_leaf(const builder *B, uint32_t n, const aabb *geo, bool have
     if ((int)n > B->maxleaf) return false;
     if (!have) return true;
     float A = half_area(geo);
-    return B->ci * (float)n * A <= B->ct * A + B->ci * s->cost;
+    return B->ci * (float)sah_blocks(n, B->block) * A <= B->ct * A + B->ci * s->cost;
 }
 
 static void build_rec(builder *B, worker *w, prim_ref *r, uint32_t node, uint32_t begin,
@@ -548,7 +552,7 @@ static void build_rec(builder *B, worker *w, prim_ref *r, uint32_t node, uint32_
         have = pair = s.cost < INFINITY;
     } else if (n > 1 && !forced && binner_init(&bn, cent, B->bins)) {
         bin_refs(&bn, r + begin, n, w->bins);
-        have = find_split(&bn, w->bins, &s);
+        have = find_split(&bn, w->bins, B->block, &s);
         if (have) {
             const bin *ab = w->bins + s.axis * B->bins;
             bins_bounds(ab, 0, s.mid, &lg);
@@ -558,7 +562,7 @@ static void build_rec(builder *B, worker *w, prim_ref *r, uint32_t node, uint32_
     if (prefer_leaf(B, n, geo, have, &s) || atomic_load_explicit(&B->failed, memory_order_relaxed)) {
         w->nodes[node].first = begin;
         w->nodes[node].count = n;
-        t->sah += (double)B->ci * n * half_area_d(geo);
+        t->sah += (double)B->ci * sah_blocks(n, B->block) * half_area_d(geo);
         return;
     }
     uint32_t mid;
@@ -764,7 +768,7 @@ static bool top_level(builder *B)
         if (nd->sah) {
             bin *acc = B->blk_bins + nd->blk0 * nb3;
             for (size_t k = 1; k < nd->nblk; k++) bins_merge(acc, acc + k * nb3, (int)nb3);
-            nd->sah = find_split(&nd->bn, acc, &nd->s);
+            nd->sah = find_split(&nd->bn, acc, B->block, &nd->s);
         }
         /* Larger than a leaf may be: always split. */
         nd->nleft = nd->sah ? 0 : (nd->end - nd->begin) / 2;
@@ -870,6 +874,7 @@ void lanes_bvh_default_options(lanes_bvh_build_options *o)
 {
     o->bins = 16;
     o->max_leaf_size = 4;
+    o->sah_block = 1;
     o->traversal_cost = 1.0f;
     o->intersect_cost = 1.0f;
     o->threads = 0;
@@ -934,6 +939,7 @@ lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_op
     if (opt->bins < 2 || opt->bins > MAX_BINS)
         return fail(err, "bins must be between 2 and 256");
     if (opt->max_leaf_size < 1) return fail(err, "max_leaf_size must be at least 1");
+    if (opt->sah_block < 1 || opt->sah_block > 64) return fail(err, "sah_block must be between 1 and 64");
     if (!(opt->traversal_cost >= 0.0f && opt->traversal_cost <= FLT_MAX) ||
         !(opt->intersect_cost >= 0.0f && opt->intersect_cost <= FLT_MAX))
         return fail(err, "costs must be finite and not negative");
@@ -948,6 +954,7 @@ lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_op
     B->scene = scene;
     B->bins = opt->bins;
     B->maxleaf = opt->max_leaf_size;
+    B->block = (uint32_t)opt->sah_block;
     B->ct = opt->traversal_cost;
     B->ci = opt->intersect_cost;
     B->ntri = scene->triangle_count;
@@ -1076,6 +1083,7 @@ lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_op
     bvh->depth = depth;
     bvh->traversal_cost = B->ct;
     bvh->intersect_cost = B->ci;
+    bvh->sah_block = (int)B->block;
     bvh->threads = B->pool.threads;
     ok = true;
 

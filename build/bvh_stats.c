@@ -26,7 +26,7 @@ size_t lanes_bvh2_bytes(const lanes_bvh2 *bvh)
 size_t lanes_wbvh_bytes(const lanes_wbvh *w)
 {
     if (!w) return 0;
-    return w->node_count * (size_t)w->width * (6 * sizeof(float) + 2 * sizeof(uint32_t));
+    return w->node_count * lanes_wnode_bytes(w->width) + w->block_count * lanes_wblock_bytes(w->width);
 }
 
 typedef struct walk_item {
@@ -81,7 +81,8 @@ bool lanes_bvh2_stats(const lanes_bvh2 *bvh, float traversal_cost, float interse
             st->leaves++;
             st->prims += n->count;
             if (n->count > st->max_leaf_size) st->max_leaf_size = n->count;
-            sum += (double)intersect_cost * n->count * a;
+            int blk = bvh->sah_block > 0 ? bvh->sah_block : 1;
+            sum += (double)intersect_cost * ((n->count + (uint32_t)blk - 1) / (uint32_t)blk) * a;
         } else {
             st->interior++;
             sum += (double)traversal_cost * a;
@@ -116,7 +117,7 @@ bool lanes_wbvh_stats(const lanes_wbvh *w, float traversal_cost, float intersect
                       lanes_bvh_stats *st)
 {
     memset(st, 0, sizeof *st);
-    if (!w || !w->bounds || !w->child || !w->count || w->node_count == 0) return false;
+    if (!w || !w->nodes || !w->blocks || w->node_count == 0) return false;
     if (w->width != 4 && w->width != 8 && w->width != 16) return false;
     const size_t W = (size_t)w->width, nn = w->node_count;
     walk_stack s = {0};
@@ -132,13 +133,13 @@ bool lanes_wbvh_stats(const lanes_wbvh *w, float traversal_cost, float intersect
         }
         st->nodes++;
         if (it.depth > st->depth) st->depth = it.depth;
-        const float *b = w->bounds + (size_t)it.node * 6 * W;
+        const float *b = lanes_wnode_bounds(w, it.node);
+        const uint32_t *ref = lanes_wnode_refs(w, it.node);
         float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         /* Pushed in reverse so the walk visits slots in order. */
         for (size_t j = W; j-- > 0;) {
-            size_t k = (size_t)it.node * W + j;
-            uint32_t c = w->child[k], n = w->count[k];
-            if (c == LANES_WBVH_EMPTY && n == 0) {
+            uint32_t c = ref[j];
+            if (c == LANES_WBVH_EMPTY) {
                 st->empty_slots++;
                 continue;
             }
@@ -150,11 +151,21 @@ bool lanes_wbvh_stats(const lanes_wbvh *w, float traversal_cost, float intersect
                 hi[p] = chi[p] > hi[p] ? chi[p] : hi[p];
             }
             filled++;
-            if (n > 0) {
+            if (lanes_wref_is_leaf(c)) {
+                uint32_t first = lanes_wref_block(c), nb = lanes_wref_blocks(c), n = 0;
+                if (first > w->block_count || nb > w->block_count - first) {
+                    ok = false;
+                    break;
+                }
+                for (uint32_t blk = first; blk < first + nb; blk++) {
+                    const uint32_t *prim = lanes_wblock_prims(w, blk);
+                    for (size_t l = 0; l < W; l++) n += prim[l] != LANES_NO_HIT;
+                }
+                st->blocks += nb;
                 st->leaves++;
                 st->prims += n;
                 if (n > st->max_leaf_size) st->max_leaf_size = n;
-                sum += (double)intersect_cost * n * box_area(clo, chi);
+                sum += (double)intersect_cost * nb * box_area(clo, chi);
             } else {
                 st->interior++;
                 if (c >= nn) {
@@ -175,6 +186,7 @@ bool lanes_wbvh_stats(const lanes_wbvh *w, float traversal_cost, float intersect
     }
     st->avg_leaf_size = st->leaves ? (double)st->prims / (double)st->leaves : 0.0;
     st->avg_children = st->nodes ? (double)filled / (double)st->nodes : 0.0;
+    st->block_fill = st->blocks ? (double)st->prims / ((double)st->blocks * (double)W) : 0.0;
     st->sah_cost = root > 0.0 ? sum / root : 0.0;
     st->bytes = lanes_wbvh_bytes(w);
     return true;

@@ -8,10 +8,12 @@
  * lanes_wbvh_stats reports the fill.
  *
  * Two passes: the first decides the slots of every node (which BVH2 node
- * each slot holds), so that the node count is known before the SoA arrays,
- * 32 * width bytes per node, are allocated; the second writes them, on as
- * many threads as built the BVH2, in blocks whose SAH sums are added in
- * block order (the same result for every thread count).
+ * each slot holds) and the leaf blocks of every leaf slot, in the order the
+ * walk meets them, so that a node's leaves lie next to each other and the
+ * node and block counts are known before anything is allocated; the second
+ * writes nodes and blocks, on as many threads as built the BVH2, in work
+ * items whose SAH sums are added in item order (the same result for every
+ * thread count).
  *
  * Compiled for the x86-64 baseline. */
 #define _POSIX_C_SOURCE 200809L
@@ -46,9 +48,8 @@ static double node_area(const lanes_bvh2_node *n)
 void lanes_wbvh_free(lanes_wbvh *w)
 {
     if (!w) return;
-    free(w->bounds);
-    free(w->child);
-    free(w->count);
+    free(w->nodes);
+    free(w->blocks);
     memset(w, 0, sizeof *w);
 }
 
@@ -71,6 +72,39 @@ typedef struct fill_ctx {
     double root_area;   /* written by block 0 */
 } fill_ctx;
 
+/* Exactly the test the kernels would make per ray (see triangle_core.h),
+ * in the same float operations (no contraction), so skipping it there
+ * changes no result. */
+static bool no_area(const float v[9])
+{
+    float e1[3], e2[3];
+    for (int a = 0; a < 3; a++) e1[a] = v[3 + a] - v[a], e2[a] = v[6 + a] - v[a];
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
+}
+
+/* The blocks of one leaf: triangles [first, first + count) of the BVH2's
+ * leaf order, from block `block` on. */
+static void fill_leaf(const lanes_bvh2 *bvh, lanes_wbvh *out, uint32_t block, uint32_t first, uint32_t count)
+{
+    const size_t W = (size_t)out->width;
+    const lanes_triangles *t = &bvh->tris;
+    const float *soa[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
+    for (uint32_t k = 0; k < count; k += (uint32_t)W, block++) {
+        float *v = (float *)(void *)(out->blocks + block * lanes_wblock_bytes(out->width));
+        uint32_t *prim = (uint32_t *)(void *)(v + 9 * W);
+        for (size_t j = 0; j < W; j++) {
+            float tv[9];
+            bool real = k + j < count;
+            for (int c = 0; c < 9; c++) tv[c] = real ? soa[c][first + k + j] : NAN;
+            if (real && no_area(tv))
+                for (int c = 0; c < 9; c++) tv[c] = NAN;
+            for (int c = 0; c < 9; c++) v[c * W + j] = tv[c];
+            prim[j] = real ? bvh->prim_index[first + k + j] : LANES_NO_HIT;
+        }
+    }
+}
+
 /* Pass 2 for wide nodes [item * FILL_BLOCK, ...). */
 static void fill_block(void *ctx, size_t item, int tid)
 {
@@ -83,7 +117,9 @@ static void fill_block(void *ctx, size_t item, int tid)
     size_t begin = item * FILL_BLOCK, end = begin + FILL_BLOCK < f->count ? begin + FILL_BLOCK : f->count;
     double sah = 0.0;
     for (size_t i = begin; i < end; i++) {
-        float *b = out->bounds + i * 6 * W;
+        float *b = (float *)(void *)(out->nodes + i * lanes_wnode_bytes(out->width));
+        memset(b, 0, lanes_wnode_bytes(out->width)); /* the padding too: trees compare bytewise */
+        uint32_t *ref = (uint32_t *)(void *)(b + 6 * W);
         float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
         for (size_t j = 0; j < W; j++) {
             size_t k = i * W + j;
@@ -93,8 +129,7 @@ static void fill_block(void *ctx, size_t item, int tid)
                     b[p * W + j] = INFINITY;
                     b[(p + 3) * W + j] = -INFINITY;
                 }
-                out->child[k] = LANES_WBVH_EMPTY;
-                out->count[k] = 0;
+                ref[j] = LANES_WBVH_EMPTY;
                 continue;
             }
             const lanes_bvh2_node *c = &nd[s];
@@ -104,9 +139,11 @@ static void fill_block(void *ctx, size_t item, int tid)
                 box[p] = c->min[p] < box[p] ? c->min[p] : box[p];
                 box[p + 3] = c->max[p] > box[p + 3] ? c->max[p] : box[p + 3];
             }
-            out->child[k] = f->wchild[k];
-            out->count[k] = c->count;
-            if (c->count > 0) sah += ci * c->count * node_area(c);
+            ref[j] = f->wchild[k];
+            if (c->count > 0) {
+                fill_leaf(f->bvh, out, lanes_wref_block(ref[j]), c->first, c->count);
+                sah += ci * lanes_wref_blocks(ref[j]) * node_area(c);
+            }
         }
         lanes_bvh2_node u;
         memcpy(u.min, box, sizeof u.min);
@@ -145,7 +182,7 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
     uint32_t *wchild = lanes_big_alloc(cap * W, sizeof *wchild);
     bool ok = roots && stack && slot && wchild;
     const char *why = "out of memory";
-    size_t count = 1, sp = 0;
+    size_t count = 1, sp = 0, blocks = 0;
     if (ok) {
         roots[0] = 0;
         stack[sp++] = 0;
@@ -204,14 +241,23 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
             slot[k] = s[j];
             const lanes_bvh2_node *c = &nd[s[j]];
             if (c->count > 0) {
+                size_t nb = (c->count + W - 1) / W;
                 if (c->first > bvh->prim_count || c->count > bvh->prim_count - c->first) {
                     ok = false;
                     why = "malformed BVH2: leaf range out of range";
+                } else if (nb > LANES_WLEAF_MAX_BLOCKS) {
+                    ok = false;
+                    why = "a leaf spans more than 16 blocks (max_leaf_size above 16 * width)";
+                } else if (blocks + nb > LANES_WBVH_MAX_BLOCKS) {
+                    ok = false;
+                    why = "too many triangles for one tree";
+                } else {
+                    wchild[k] = LANES_WREF_LEAF | (uint32_t)blocks << 4 | (uint32_t)(nb - 1);
+                    blocks += nb;
                 }
-                wchild[k] = c->first;
                 continue;
             }
-            if (count == cap) {
+            if (count == cap || count >= LANES_WREF_LEAF) {
                 ok = false;
                 why = "malformed BVH2: more interior nodes than (nodes - 1) / 2";
                 break;
@@ -226,10 +272,11 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
     if (ok) {
         out->width = width;
         out->node_count = count;
-        out->bounds = lanes_big_alloc(count * 6 * W, sizeof(float));
-        out->child = lanes_big_alloc(count * W, sizeof(uint32_t));
-        out->count = lanes_big_alloc(count * W, sizeof(uint32_t));
-        ok = out->bounds && out->child && out->count;
+        out->block_count = blocks;
+        out->prim_count = bvh->prim_count;
+        out->nodes = lanes_big_alloc(count, lanes_wnode_bytes(width));
+        out->blocks = lanes_big_alloc(blocks ? blocks : 1, lanes_wblock_bytes(width));
+        ok = out->nodes && out->blocks;
     }
     double sah = 0.0, root_area = 0.0;
     if (ok) {
@@ -256,6 +303,28 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
         return fail(err, why);
     }
     out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
+    out->skipped = bvh->skipped;
     out->collapse_seconds = now_seconds() - t0;
+    out->build_seconds = out->collapse_seconds;
     return LANES_OK;
+}
+
+lanes_status lanes_wbvh_build(const lanes_scene *scene, int width, const lanes_bvh_build_options *base,
+                              lanes_wbvh *out, lanes_error *err)
+{
+    if (!out) return fail(err, "no output");
+    memset(out, 0, sizeof *out);
+    if (width != 4 && width != 8 && width != 16) return fail(err, "width must be 4, 8 or 16");
+    lanes_bvh_build_options o;
+    if (base) o = *base;
+    else lanes_bvh_default_options(&o);
+    o.max_leaf_size = width;
+    o.sah_block = width;
+    lanes_bvh2 bvh;
+    lanes_status status = lanes_bvh2_build(scene, &o, &bvh, err);
+    if (status != LANES_OK) return status;
+    status = lanes_wbvh_from_bvh2(&bvh, width, out, err);
+    if (status == LANES_OK) out->build_seconds = bvh.build_seconds + out->collapse_seconds;
+    lanes_bvh2_free(&bvh);
+    return status;
 }

@@ -266,7 +266,11 @@ static void test_closed(void)
  * triangles disagree more often about a shared edge. The rays are
  * deterministic, so these are counts, not rates; a shorter run traces a
  * prefix and can only count fewer. The bound adds a tenth plus 2, for
- * changes of rounding that are not regressions. */
+ * changes of rounding that are not regressions. Fast mode's random rays at
+ * 1e5 were measured again when its box test became one FMA on the ray's
+ * precomputed o * (1/d) (about 4% faster): that product's rounding grows
+ * with |o|, and 1e5 from the origin it loses a box a ray grazes in up to 26
+ * of 10^6 random rays (bunny; default mode: 1). */
 typedef struct {
     const char *mesh;
     double translation;
@@ -278,13 +282,13 @@ typedef struct {
 static const leak_bound bounds[] = {
     {"sphere", 0, LANES_ACCURACY_FAST, 0, 24031},   {"sphere", 0, LANES_ACCURACY_DEFAULT, 0, 22747},
     {"sphere", 1e3, LANES_ACCURACY_FAST, 0, 19250}, {"sphere", 1e3, LANES_ACCURACY_DEFAULT, 0, 18060},
-    {"sphere", 1e5, LANES_ACCURACY_FAST, 0, 14066}, {"sphere", 1e5, LANES_ACCURACY_DEFAULT, 0, 13195},
+    {"sphere", 1e5, LANES_ACCURACY_FAST, 6, 14066}, {"sphere", 1e5, LANES_ACCURACY_DEFAULT, 0, 13195},
     {"bunny", 0, LANES_ACCURACY_FAST, 2, 14785},    {"bunny", 0, LANES_ACCURACY_DEFAULT, 2, 14031},
     {"bunny", 1e3, LANES_ACCURACY_FAST, 1, 11857},  {"bunny", 1e3, LANES_ACCURACY_DEFAULT, 1, 11151},
-    {"bunny", 1e5, LANES_ACCURACY_FAST, 1, 5626},   {"bunny", 1e5, LANES_ACCURACY_DEFAULT, 1, 5251},
+    {"bunny", 1e5, LANES_ACCURACY_FAST, 26, 5626},   {"bunny", 1e5, LANES_ACCURACY_DEFAULT, 1, 5251},
     {"dragon", 0, LANES_ACCURACY_FAST, 1, 10647},   {"dragon", 0, LANES_ACCURACY_DEFAULT, 1, 10090},
     {"dragon", 1e3, LANES_ACCURACY_FAST, 1, 8556},  {"dragon", 1e3, LANES_ACCURACY_DEFAULT, 1, 7996},
-    {"dragon", 1e5, LANES_ACCURACY_FAST, 1, 5131},  {"dragon", 1e5, LANES_ACCURACY_DEFAULT, 1, 4791},
+    {"dragon", 1e5, LANES_ACCURACY_FAST, 4, 5131},  {"dragon", 1e5, LANES_ACCURACY_DEFAULT, 1, 4791},
 };
 #define BOUND_RANDOM_RAYS 1000000ull
 #define BOUND_AIMED_RAYS 100000ull

@@ -284,7 +284,8 @@ static bool check_node(check2 *c, uint32_t node, int depth, float lo[3], float h
         c->in->lo[node] = n->first;
         c->in->hi[node] = n->first + n->count;
         c->in->leaves++;
-        c->in->sah += (double)c->ci * n->count * a;
+        uint32_t blk = (uint32_t)b->sah_block;
+        c->in->sah += (double)c->ci * ((n->count + blk - 1) / blk) * a;
         return true;
     }
     REQUIRE(n->first + 1 < b->node_count,
@@ -374,16 +375,21 @@ typedef struct checkw {
     const lanes_wbvh *w;
     const bvh2_info *in;
     uint32_t *wlo, *whi;    /* triangle range under each wide node */
+    uint32_t *slo, *shi;    /* and under each slot */
+    uint32_t *pos_of;       /* scene triangle -> position in the BVH2's leaf order */
     uint8_t *visited;
     uint8_t *cover;
+    uint8_t *block_seen;
     int depth;
     double sah;
 } checkw;
 
 static const float *plane(const lanes_wbvh *w, size_t node, int p)
 {
-    return w->bounds + (node * 6 + (size_t)p) * (size_t)w->width;
+    return lanes_wnode_bounds(w, node) + (size_t)p * (size_t)w->width;
 }
+
+static uint32_t slot_ref(const lanes_wbvh *w, size_t node, int j) { return lanes_wnode_refs(w, node)[j]; }
 
 static void slot_box(const lanes_wbvh *w, size_t node, int j, float lo[3], float hi[3])
 {
@@ -393,10 +399,60 @@ static void slot_box(const lanes_wbvh *w, size_t node, int j, float lo[3], float
     }
 }
 
-static bool slot_empty(const lanes_wbvh *w, size_t node, int j)
+static bool slot_empty(const lanes_wbvh *w, size_t node, int j) { return slot_ref(w, node, j) == LANES_WBVH_EMPTY; }
+
+/* The float test the kernels would make per ray: a triangle whose edges'
+ * cross product is exactly zero is never hit, and its block lane holds NaN. */
+static bool zero_area(const float v[9])
 {
-    return w->child[node * (size_t)w->width + j] == LANES_WBVH_EMPTY &&
-           w->count[node * (size_t)w->width + j] == 0;
+    float e1[3], e2[3];
+    for (int a = 0; a < 3; a++) e1[a] = v[3 + a] - v[a], e2[a] = v[6 + a] - v[a];
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
+}
+
+/* A leaf slot's blocks: reached once, holding consecutive triangles of the
+ * BVH2's leaf order, each a bit-exact copy (or NaN where it has no area),
+ * padding only after the last triangle, as few blocks as the count needs.
+ * Sets the slot's range of leaf positions. */
+static bool check_leaf(checkw *c, uint32_t ref, uint32_t *lo, uint32_t *hi)
+{
+    const lanes_wbvh *w = c->w;
+    const lanes_triangles *t = &c->b->tris;
+    const float *soa[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
+    const size_t W = (size_t)w->width;
+    uint32_t first = lanes_wref_block(ref), nb = lanes_wref_blocks(ref), n = 0;
+    REQUIRE(first < w->block_count && nb <= w->block_count - first, "leaf blocks out of range");
+    bool ended = false;
+    for (uint32_t blk = first; blk < first + nb; blk++) {
+        REQUIRE(!c->block_seen[blk], "block %u reached twice", blk);
+        c->block_seen[blk] = 1;
+        const float *v = lanes_wblock_verts(w, blk);
+        const uint32_t *prim = lanes_wblock_prims(w, blk);
+        for (size_t j = 0; j < W; j++) {
+            if (prim[j] == LANES_NO_HIT) {
+                ended = true;
+                for (int f = 0; f < 9; f++) REQUIRE(isnan(v[f * W + j]), "padding lane %zu of block %u not NaN", j, blk);
+                continue;
+            }
+            REQUIRE(!ended, "block %u: a triangle after padding", blk);
+            REQUIRE(prim[j] < c->b->prim_count + c->b->skipped, "block %u lane %zu: prim %u out of range", blk, j, prim[j]);
+            uint32_t pos = c->pos_of[prim[j]];
+            REQUIRE(pos != UINT32_MAX, "block %u: prim %u is in no BVH2 leaf", blk, prim[j]);
+            if (n == 0) *lo = pos;
+            REQUIRE(pos == *lo + n, "leaf at block %u: triangles not consecutive in leaf order", first);
+            float tv[9];
+            for (int f = 0; f < 9; f++) tv[f] = soa[f][pos];
+            bool flat = zero_area(tv);
+            for (int f = 0; f < 9; f++)
+                REQUIRE(flat ? isnan(v[f * W + j]) : !memcmp(&v[f * W + j], &tv[f], sizeof(float)),
+                        "block %u lane %zu: vertex data differ from the BVH2's", blk, j);
+            n++;
+        }
+    }
+    REQUIRE(n > 0 && (n + W - 1) / W == nb, "leaf of %u triangles in %u blocks", n, nb);
+    *hi = *lo + n;
+    return true;
 }
 
 /* Pass 1: ranges, coverage, layout of every node, reachability, SAH. */
@@ -425,32 +481,28 @@ static bool walk_wide(checkw *c, uint32_t node, int depth)
             continue;
         }
         REQUIRE(!seen_empty, "wide node %u: filled slot %d after an empty one", node, j);
-        REQUIRE(w->child[k] != LANES_WBVH_EMPTY, "slot with count but no child");
         filled++;
         for (int p = 0; p < 3; p++) {
             REQUIRE(slo[p] <= shi[p], "slot %d of wide node %u has an empty box", j, node);
             blo[p] = fminf(blo[p], slo[p]);
             bhi[p] = fmaxf(bhi[p], shi[p]);
         }
-        uint32_t slo_r, shi_r;
-        if (w->count[k] > 0) {
-            uint32_t f = w->child[k], n = w->count[k];
-            REQUIRE(f <= c->b->prim_count && n <= c->b->prim_count - f, "wide leaf out of range");
-            for (uint32_t t = f; t < f + n; t++) {
+        uint32_t ref = slot_ref(w, node, j);
+        if (lanes_wref_is_leaf(ref)) {
+            if (!check_leaf(c, ref, &c->slo[k], &c->shi[k])) return false;
+            for (uint32_t t = c->slo[k]; t < c->shi[k]; t++) {
                 REQUIRE(!c->cover[t], "triangle position %u reached twice in the wide BVH", t);
                 c->cover[t] = 1;
             }
-            slo_r = f;
-            shi_r = f + n;
-            c->sah += (double)c->b->intersect_cost * n * area(slo, shi);
+            c->sah += (double)c->b->intersect_cost * lanes_wref_blocks(ref) * area(slo, shi);
         } else {
-            if (!walk_wide(c, w->child[k], depth + 1)) return false;
-            slo_r = c->wlo[w->child[k]];
-            shi_r = c->whi[w->child[k]];
+            if (!walk_wide(c, ref, depth + 1)) return false;
+            c->slo[k] = c->wlo[ref];
+            c->shi[k] = c->whi[ref];
         }
-        lo = slo_r < lo ? slo_r : lo;
-        hi = shi_r > hi ? shi_r : hi;
-        total += shi_r - slo_r;
+        lo = c->slo[k] < lo ? c->slo[k] : lo;
+        hi = c->shi[k] > hi ? c->shi[k] : hi;
+        total += c->shi[k] - c->slo[k];
     }
     REQUIRE(filled >= 1, "wide node %u has no children", node);
     REQUIRE(hi - lo == total, "wide node %u does not cover one contiguous range", node);
@@ -475,27 +527,20 @@ static bool match_cut(checkw *c, uint32_t wnode, uint32_t d, cut *ct, uint32_t *
     const int W = w->width;
     for (int j = 0; j < ct->nslots; j++) {
         size_t k = (size_t)wnode * W + j;
-        uint32_t lo, hi;
-        if (w->count[k] > 0) {
-            lo = w->child[k];
-            hi = lo + w->count[k];
-        } else {
-            lo = c->wlo[w->child[k]];
-            hi = c->whi[w->child[k]];
-        }
-        if (lo != c->in->lo[d] || hi != c->in->hi[d]) continue;
+        uint32_t ref = slot_ref(w, wnode, j);
+        if (c->slo[k] != c->in->lo[d] || c->shi[k] != c->in->hi[d]) continue;
         REQUIRE(!ct->matched[j], "slot %d of wide node %u matched twice", j, wnode);
         ct->matched[j] = 1;
         float slo[3], shi[3];
         slot_box(w, wnode, j, slo, shi);
         REQUIRE(same_box(slo, shi, bd->min, bd->max),
               "slot %d of wide node %u: bounds differ from BVH2 node %u", j, wnode, d);
-        if (w->count[k] > 0) {
-            REQUIRE(bd->count == w->count[k] && bd->first == w->child[k],
+        if (lanes_wref_is_leaf(ref)) {
+            REQUIRE(bd->count == c->shi[k] - c->slo[k] && bd->first == c->slo[k],
                   "wide leaf (slot %d of %u) is not BVH2 leaf %u", j, wnode, d);
         } else {
             REQUIRE(bd->count == 0, "wide interior slot %d of %u is BVH2 leaf %u", j, wnode, d);
-            pairs_w[*npairs] = w->child[k];
+            pairs_w[*npairs] = ref;
             pairs_b[*npairs] = d;
             (*npairs)++;
         }
@@ -511,17 +556,26 @@ static bool match_cut(checkw *c, uint32_t wnode, uint32_t d, cut *ct, uint32_t *
 static bool check_wide(const lanes_bvh2 *b, const bvh2_info *in, const lanes_wbvh *w, int width)
 {
     REQUIRE(w->width == width, "width %d, expected %d", w->width, width);
-    REQUIRE(w->node_count >= 1 && w->bounds && w->child && w->count, "empty wide BVH");
-    REQUIRE((uintptr_t)w->bounds % 64 == 0 && (uintptr_t)w->child % 64 == 0 &&
-              (uintptr_t)w->count % 64 == 0,
-          "wide arrays not 64-byte aligned");
-    checkw c = {b, w, in, calloc(w->node_count, 4), calloc(w->node_count, 4),
-                calloc(w->node_count, 1), calloc(b->prim_count, 1), 0, 0.0};
+    REQUIRE(w->node_count >= 1 && w->nodes && w->blocks, "empty wide BVH");
+    REQUIRE((uintptr_t)w->nodes % 64 == 0 && (uintptr_t)w->blocks % 64 == 0, "wide arrays not 64-byte aligned");
+    REQUIRE(lanes_wnode_bytes(width) % 64 == 0 && lanes_wblock_bytes(width) % (4 * (size_t)width < 64 ? 4 * (size_t)width : 64) == 0,
+            "nodes or blocks not aligned for a vector of the width");
+    REQUIRE(w->prim_count == b->prim_count, "wide BVH holds %zu triangles, the BVH2 %zu", w->prim_count, b->prim_count);
+    size_t nslots = w->node_count * (size_t)width, nscene = b->prim_count + b->skipped;
+    checkw c = {b, w, in, calloc(w->node_count, 4), calloc(w->node_count, 4), calloc(nslots, 4), calloc(nslots, 4),
+                malloc(nscene * 4), calloc(w->node_count, 1), calloc(b->prim_count, 1), calloc(w->block_count, 1),
+                0, 0.0};
     uint32_t *pw = malloc(w->node_count * 4), *pb = malloc(w->node_count * 4);
-    bool ok = c.wlo && c.whi && c.visited && c.cover && pw && pb;
+    bool ok = c.wlo && c.whi && c.slo && c.shi && c.pos_of && c.visited && c.cover && c.block_seen && pw && pb;
+    if (ok) {
+        memset(c.pos_of, 0xff, nscene * 4);
+        for (size_t j = 0; j < b->prim_count; j++) c.pos_of[b->prim_index[j]] = (uint32_t)j;
+    }
     ok = ok && walk_wide(&c, 0, 1);
     for (size_t i = 0; ok && i < w->node_count; i++)
         if (!c.visited[i]) ok = failf(__LINE__, "wide node %zu unreachable", i);
+    for (size_t i = 0; ok && i < w->block_count; i++)
+        if (!c.block_seen[i]) ok = failf(__LINE__, "block %zu unreachable", i);
     for (size_t j = 0; ok && j < b->prim_count; j++)
         if (!c.cover[j]) ok = failf(__LINE__, "triangle position %zu not in the wide BVH", j);
     /* Pass 2: node by node against the BVH2, from the root pair (0, 0). */
@@ -556,8 +610,7 @@ static bool check_wide(const lanes_bvh2 *b, const bvh2_info *in, const lanes_wbv
          * slot left closed (the largest is always opened first). */
         bool any_interior = false;
         for (int j = 0; ok && j < ct.nslots; j++) {
-            size_t k = (size_t)wn * width + j;
-            if (w->count[k] > 0) continue;
+            if (lanes_wref_is_leaf(slot_ref(w, wn, j))) continue;
             any_interior = true;
             float slo[3], shi[3];
             slot_box(w, wn, j, slo, shi);
@@ -596,8 +649,12 @@ static bool check_wide(const lanes_bvh2 *b, const bvh2_info *in, const lanes_wbv
     }
     free(c.wlo);
     free(c.whi);
+    free(c.slo);
+    free(c.shi);
+    free(c.pos_of);
     free(c.visited);
     free(c.cover);
+    free(c.block_seen);
     free(pw);
     free(pb);
     return ok;
@@ -623,10 +680,10 @@ static bool same_bvh2(const lanes_bvh2 *a, const lanes_bvh2 *b)
 
 static bool same_wide(const lanes_wbvh *a, const lanes_wbvh *b)
 {
-    size_t n = a->node_count * (size_t)a->width;
-    return a->width == b->width && a->node_count == b->node_count && a->sah_cost == b->sah_cost &&
-           !memcmp(a->bounds, b->bounds, 6 * n * sizeof(float)) &&
-           !memcmp(a->child, b->child, n * 4) && !memcmp(a->count, b->count, n * 4);
+    return a->width == b->width && a->node_count == b->node_count && a->block_count == b->block_count &&
+           a->sah_cost == b->sah_cost &&
+           !memcmp(a->nodes, b->nodes, a->node_count * lanes_wnode_bytes(a->width)) &&
+           !memcmp(a->blocks, b->blocks, a->block_count * lanes_wblock_bytes(a->width));
 }
 
 static void print_stats(const char *name, const lanes_bvh2 *b, const lanes_wbvh w[3])
@@ -784,9 +841,9 @@ static void negative_tests(void)
                 break;
             }
     float *pf[3] = {
-        &w.bounds[0 * 8 + 0],
-        empty_node != SIZE_MAX ? &w.bounds[(empty_node * 6 + 3) * 8 + empty_slot] : NULL,
-        &w.bounds[4 * 8 + 1]};
+        (float *)plane(&w, 0, 0),
+        empty_node != SIZE_MAX ? (float *)plane(&w, empty_node, 3) + empty_slot : NULL,
+        (float *)plane(&w, 0, 4) + 1};
     for (int i = 0; i < 3; i++) {
         if (!pf[i]) continue;
         float keep = *pf[i];
@@ -797,14 +854,33 @@ static void negative_tests(void)
         CHECK(!accepted, "wide checker accepted corruption %d", i);
         g_quiet = true;
     }
-    uint32_t c0 = w.child[0];
-    w.child[0] = w.child[1];
-    w.child[1] = c0;
+    uint32_t *ref0 = (uint32_t *)lanes_wnode_refs(&w, 0);
+    uint32_t c0 = ref0[0];
+    ref0[0] = ref0[1];
+    ref0[1] = c0;
     accepted = check_wide(&b, &in, &w, 8);
-    w.child[1] = w.child[0];
-    w.child[0] = c0;
+    ref0[1] = ref0[0];
+    ref0[0] = c0;
     g_quiet = false;
     CHECK(!accepted, "wide checker accepted swapped children");
+    g_quiet = true;
+    /* A leaf block: one vertex coordinate an ulp off; a prim index changed. */
+    float *v0 = (float *)lanes_wblock_verts(&w, 0);
+    uint32_t *p0 = (uint32_t *)lanes_wblock_prims(&w, 0);
+    int lane = isnan(v0[0]) ? 1 : 0;
+    float keepv = v0[lane];
+    v0[lane] = nextafterf(keepv, INFINITY);
+    accepted = check_wide(&b, &in, &w, 8);
+    v0[lane] = keepv;
+    g_quiet = false;
+    CHECK(!accepted, "wide checker accepted a changed vertex");
+    g_quiet = true;
+    uint32_t keepp = p0[0];
+    p0[0] = p0[0] == 0 ? 1 : p0[0] - 1;
+    accepted = check_wide(&b, &in, &w, 8);
+    p0[0] = keepp;
+    g_quiet = false;
+    CHECK(!accepted, "wide checker accepted a changed prim index");
     CHECK(check_wide(&b, &in, &w, 8), "restored wide tree rejected");
     info_free(&in);
     lanes_wbvh_free(&w);
@@ -823,13 +899,14 @@ static void error_tests(void)
         int bins, leaf, threads;
         float ct;
     } bad[] = {{1, 4, 0, 1}, {257, 4, 0, 1}, {16, 0, 0, 1}, {16, 4, -1, 1}, {16, 4, 0, -1},
-               {16, 4, 0, NAN}};
+               {16, 4, 0, NAN}, {16, 4, 0, 1}, {16, 4, 0, 1}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         lanes_bvh_default_options(&o);
         o.bins = bad[i].bins;
         o.max_leaf_size = bad[i].leaf;
         o.threads = bad[i].threads;
         o.traversal_cost = bad[i].ct;
+        if (i >= 6) o.sah_block = i == 6 ? 0 : 65;
         err.message[0] = 0;
         CHECK(lanes_bvh2_build(&sc, &o, &b, &err) != LANES_OK && err.message[0], "bad option %zu accepted",
                i);
@@ -1045,14 +1122,16 @@ int main(int argc, char **argv)
     sc = gen_random(50000, 1);
     run_scene(&sc, &o, threads, 3, true);
     const struct {
-        int bins, leaf;
+        int bins, leaf, block;
         float ct, ci;
-    } variants[] = {{2, 4, 1, 1}, {32, 4, 1, 1}, {256, 4, 1, 1}, {16, 1, 1, 1},
-                    {16, 8, 1, 1}, {16, 16, 1, 1}, {16, 4, 0, 1}, {16, 4, 3, 0.5f}};
+    } variants[] = {{2, 4, 1, 1, 1},   {32, 4, 1, 1, 1},  {256, 4, 1, 1, 1}, {16, 1, 1, 1, 1},
+                    {16, 8, 1, 1, 1},  {16, 16, 1, 1, 1}, {16, 4, 1, 0, 1},  {16, 4, 1, 3, 0.5f},
+                    {16, 4, 4, 1, 1},  {16, 8, 8, 1, 1},  {16, 16, 16, 1, 1}, {16, 16, 8, 1, 1}};
     for (size_t i = 0; i < sizeof variants / sizeof variants[0]; i++) {
         lanes_bvh_build_options v = o;
         v.bins = variants[i].bins;
         v.max_leaf_size = variants[i].leaf;
+        v.sah_block = variants[i].block;
         v.traversal_cost = variants[i].ct;
         v.intersect_cost = variants[i].ci;
         run_scene(&sc, &v, threads, 2, false);

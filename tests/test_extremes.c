@@ -1331,10 +1331,10 @@ static void single_ray_traversals(ctx *c, const tiny_scene *s, const lane *L, si
         snprintf(po, sizeof po, "occluded_wide(leaf %d)", leaf_sizes[l]);
         snprintf(pb, sizeof pb, "trace_bvh2(leaf %d)", leaf_sizes[l]);
         snprintf(pob, sizeof pob, "occluded_bvh2(leaf %d)", leaf_sizes[l]);
-        k->trace_wide(&s->wide[l][slot], &s->bvh[l], c->mode, rays, n, hits, NULL);
+        k->trace_wide(&s->wide[l][slot], c->mode, rays, n, hits, NULL);
         for (size_t j = 0; j < n; j++) check_hit(c, pw, &L[j], n, pos, j, &hits[j]);
         memset(occ, SENT_OCC, sizeof occ);
-        k->occluded_wide(&s->wide[l][slot], &s->bvh[l], c->mode, rays, n, occ, NULL);
+        k->occluded_wide(&s->wide[l][slot], c->mode, rays, n, occ, NULL);
         for (size_t j = 0; j < n; j++) check_occ(c, po, &L[j], n, pos, j, occ[j]);
         for (size_t j = n; j < MAXN; j++)
             if (!check(c, occ[j] == SENT_OCC, po, "past n", "written", NULL, "n=%zu, case at %zu: occluded[%zu] written",

@@ -117,7 +117,7 @@ static void same_image(const lanes_scene *scene)
         }
         const lanes_kernels *k = lanes_kernels_for(isa);
         lanes_render_accel accel;
-        if (lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err) != LANES_OK) {
+        if (lanes_render_accel_build(scene, k, true, 0, &accel, &err) != LANES_OK) {
             check(false, err.message);
             return;
         }
@@ -163,7 +163,7 @@ static bool load(const char *name, lanes_scene *scene, lanes_render_accel *accel
         harness_skip();
         return false;
     }
-    if (lanes_render_accel_build(scene, 0, 0, accel, &err) != LANES_OK) {
+    if (lanes_render_accel_build(scene, NULL, true, 0, accel, &err) != LANES_OK) {
         check(false, err.message);
         lanes_scene_free(scene);
         return false;

@@ -55,7 +55,7 @@ static bool render_with(const lanes_scene *scene, lanes_isa isa, int size, const
     memset(&err, 0, sizeof err);
     const lanes_kernels *k = lanes_kernels_for(isa);
     lanes_render_accel accel;
-    if (lanes_render_accel_build(scene, k->wide_width, 0, &accel, &err) != LANES_OK) {
+    if (lanes_render_accel_build(scene, k, false, 0, &accel, &err) != LANES_OK) {
         printf("FAIL: acceleration structure for %s: %s\n", k->name, err.message);
         return false;
     }

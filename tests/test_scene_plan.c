@@ -139,7 +139,7 @@ static double mean_radiance(const lanes_scene *s, lanes_accuracy mode, bool pack
     const lanes_kernels *k = lanes_kernels_current();
     lanes_render_accel a;
     lanes_error err;
-    if (lanes_render_accel_build(s, k->wide_width, 0, &a, &err) != LANES_OK) {
+    if (lanes_render_accel_build(s, k, true, 0, &a, &err) != LANES_OK) {
         printf("FAIL: %s\n", err.message);
         return NAN;
     }
@@ -231,7 +231,7 @@ static void no_geometry_needed(void)
     const lanes_kernels *k = lanes_kernels_current();
     lanes_render_accel a;
     lanes_error err;
-    if (lanes_render_accel_build(&s, k->wide_width, 0, &a, &err) != LANES_OK) {
+    if (lanes_render_accel_build(&s, k, false, 0, &a, &err) != LANES_OK) {
         CHECK(false, "%s", err.message);
         lanes_scene_free(&s);
         return;

@@ -432,6 +432,9 @@ static bool build_bvhs(const lanes_scene *s, lanes_bvh2 bvh[LEAF_SIZES], lanes_w
         lanes_bvh_build_options bo;
         lanes_bvh_default_options(&bo);
         bo.max_leaf_size = leaf_sizes[l];
+        /* the largest leaves with the SAH by blocks of 8, as the wide builds
+         * use: leaves spanning several blocks, padding lanes, full blocks */
+        if (l == LEAF_SIZES - 1) bo.sah_block = 8;
         bo.threads = 1;
         if (lanes_bvh2_build(s, &bo, &bvh[l], &err) != LANES_OK) {
             printf("FAIL: BVH2 of %s: %s\n", s->name, err.message);
@@ -600,10 +603,10 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                         k->occluded_bvh2(&bvh[l], acc, mode_rays, nrays, occ, NULL);
                         k->occluded_bvh2(&bvh[l], acc, mode_rays, nrays, occ2, &stats);
                     } else {
-                        k->trace_wide(w, &bvh[l], acc, mode_rays, nrays, hits, NULL);
-                        k->trace_wide(w, &bvh[l], acc, mode_rays, nrays, hits2, &stats);
-                        k->occluded_wide(w, &bvh[l], acc, mode_rays, nrays, occ, NULL);
-                        k->occluded_wide(w, &bvh[l], acc, mode_rays, nrays, occ2, &stats);
+                        k->trace_wide(w, acc, mode_rays, nrays, hits, NULL);
+                        k->trace_wide(w, acc, mode_rays, nrays, hits2, &stats);
+                        k->occluded_wide(w, acc, mode_rays, nrays, occ, NULL);
+                        k->occluded_wide(w, acc, mode_rays, nrays, occ2, &stats);
                     }
                     CHECK(stats.rays == 2 * nrays, "%s %s %s: stats.rays %llu, expected %zu",
                           s->name, k->name, sn, (unsigned long long)stats.rays, 2 * nrays);
@@ -952,13 +955,13 @@ static int run_embree(const char *name, long nrays)
                 if (scheme)
                     k->trace_bvh2(&bvh, LANES_ACCURACY_DEFAULT, rs->rays, n, lh, NULL);
                 else
-                    k->trace_wide(wb, &bvh, LANES_ACCURACY_DEFAULT, rs->rays, n, lh, NULL);
+                    k->trace_wide(wb, LANES_ACCURACY_DEFAULT, rs->rays, n, lh, NULL);
                 if (rs->occlusion) {
                     lanes_embree_occluded1(emb, rs->rays, n, eo);
                     if (scheme)
                         k->occluded_bvh2(&bvh, LANES_ACCURACY_DEFAULT, rs->rays, n, lo_, NULL);
                     else
-                        k->occluded_wide(wb, &bvh, LANES_ACCURACY_DEFAULT, rs->rays, n, lo_, NULL);
+                        k->occluded_wide(wb, LANES_ACCURACY_DEFAULT, rs->rays, n, lo_, NULL);
                 }
                 int printed = 0;
                 for (size_t r = 0; r < n; r++) {

@@ -96,20 +96,20 @@
       (f, tris, n, method, keep))
 
 /* traverse_kernels.c: single-ray traversal of n prepared rays
- * (lanes_ray_prepare_rcp), one after the other. The wide form reads a wide
- * BVH of the table's wide_width children (SIMD across a node's children and
- * across a leaf's triangles); the BVH2 form visits two children at a time,
+ * (lanes_ray_prepare_rcp), one after the other. The wide form reads only a
+ * wide BVH of the table's wide_width children (SIMD across a node's children
+ * and across a leaf block's triangles); the BVH2 form visits two children at a time,
  * as the thesis' "single" baseline, and tests leaf triangles with the wide
  * triangle kernel. */
 #define LANES_KERNELS_TRAVERSE(X)                                                          \
     X(COUNTED_VOID, void, trace_wide,                                                      \
-      (const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,    \
-       const lanes_ray *rays, size_t n, lanes_hit *hits, lanes_trace_stats *stats),        \
-      (w, b, accuracy, rays, n, hits))                                                     \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
+      (w, accuracy, rays, n, hits))                                                        \
     X(COUNTED_VOID, void, occluded_wide,                                                   \
-      (const struct lanes_wbvh *w, const struct lanes_bvh2 *b, lanes_accuracy accuracy,    \
-       const lanes_ray *rays, size_t n, uint8_t *occluded, lanes_trace_stats *stats),      \
-      (w, b, accuracy, rays, n, occluded))                                                 \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
+      (w, accuracy, rays, n, occluded))                                                    \
     X(COUNTED_VOID, void, trace_bvh2,                                                      \
       (const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,         \
        size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \

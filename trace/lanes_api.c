@@ -269,12 +269,14 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
     bo.threads = device->threads;
+    /* The wide BVH answers single rays and streams; the packet tracer
+     * still reads a BVH2 of its own. */
     lanes_status status = lanes_bvh2_build(&scene, &bo, &a->bvh2, &err);
     if (status == LANES_OK) lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
-    free(scene.verts);
     if (status == LANES_OK &&
-        (status = lanes_wbvh_from_bvh2(&a->bvh2, device->k->wide_width, &a->wide, &err)) != LANES_OK)
+        (status = lanes_wbvh_build(&scene, device->k->wide_width, &bo, &a->wide, &err)) != LANES_OK)
         lanes_bvh2_free(&a->bvh2);
+    free(scene.verts);
     if (status != LANES_OK) {
         free(a);
         return fail(device, status, "%s: %s", fn, err.message);
@@ -311,7 +313,7 @@ LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info 
     info->bytes = lanes_bvh2_bytes(&accel->bvh2) + lanes_wbvh_bytes(&accel->wide);
     memcpy(info->bounds_min, accel->bounds_min, sizeof info->bounds_min);
     memcpy(info->bounds_max, accel->bounds_max, sizeof info->bounds_max);
-    info->build_seconds = accel->bvh2.build_seconds + accel->wide.collapse_seconds;
+    info->build_seconds = accel->bvh2.build_seconds + accel->wide.build_seconds;
     return LANES_OK;
 }
 
@@ -393,7 +395,7 @@ LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray
     invalid_rays bad = {0, 0};
     lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     lanes_hit found;
-    d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &found, NULL);
+    d->k->trace_wide(&accel->wide, d->accuracy, &r, 1, &found, NULL);
     lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
     store_hit(&out, 0, &found);
     return query_result(accel, fn, &bad);
@@ -409,7 +411,7 @@ LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray,
     invalid_rays bad = {0, 0};
     lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     uint8_t hit = 0;
-    d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, &r, 1, &hit, NULL);
+    d->k->occluded_wide(&accel->wide, d->accuracy, &r, 1, &hit, NULL);
     *occluded = hit != 0;
     return query_result(accel, fn, &bad);
 }
@@ -431,10 +433,10 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
         for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
         if (occluded) {
             memset(occluded + first, 0, m);
-            d->k->occluded_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, occluded + first,
+            d->k->occluded_wide(&accel->wide, d->accuracy, chunk, m, occluded + first,
                                 NULL);
         } else {
-            d->k->trace_wide(&accel->wide, &accel->bvh2, d->accuracy, chunk, m, found, NULL);
+            d->k->trace_wide(&accel->wide, d->accuracy, chunk, m, found, NULL);
             for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);
         }
     }

@@ -42,20 +42,19 @@ void lanes_render_default_options(lanes_render_options *o)
     o->area_samples = 4;
 }
 
-lanes_status lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads,
-                                      lanes_render_accel *a, lanes_error *err)
+lanes_status lanes_render_accel_build(const lanes_scene *scene, const lanes_kernels *wide_for, bool bvh2,
+                                      int threads, lanes_render_accel *a, lanes_error *err)
 {
-    lanes_status status;
+    lanes_status status = LANES_OK;
     lanes_bvh_build_options bo;
     memset(a, 0, sizeof *a);
+    if (!wide_for && !bvh2) return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render accel: nothing to build");
     lanes_bvh_default_options(&bo);
     bo.threads = threads;
-    if ((status = lanes_bvh2_build(scene, &bo, &a->bvh2, err)) != LANES_OK) return status;
-    if (wide_width > 0 && (status = lanes_wbvh_from_bvh2(&a->bvh2, wide_width, &a->wide, err)) != LANES_OK) {
-        lanes_bvh2_free(&a->bvh2);
-        return status;
-    }
-    return LANES_OK;
+    if (bvh2) status = lanes_bvh2_build(scene, &bo, &a->bvh2, err);
+    if (status == LANES_OK && wide_for) status = lanes_wbvh_build(scene, wide_for->wide_width, &bo, &a->wide, err);
+    if (status != LANES_OK) lanes_render_accel_free(a);
+    return status;
 }
 
 void lanes_render_accel_free(lanes_render_accel *a)
@@ -101,7 +100,7 @@ static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float
     lanes_hit h;
     lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->trace_wide(&job->accel->wide, &job->accel->bvh2, job->opt->accuracy, &r, 1, &h, NULL);
+        job->k->trace_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &h, NULL);
     else
         job->k->trace_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &h, NULL);
     return h;
@@ -119,7 +118,7 @@ static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar)
     uint8_t hit = 0;
     lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->occluded_wide(&job->accel->wide, &job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, NULL);
+        job->k->occluded_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &hit, NULL);
     else
         job->k->occluded_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, NULL);
     return hit != 0;
@@ -259,6 +258,8 @@ lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *ac
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "render: the wide scheme at %s needs a %d-wide BVH (have %d)", job.k->name,
                                job.k->wide_width, accel->wide.width);
+    } else if (!opt->api_accel && opt->scheme == LANES_SCHEME_SINGLE && accel->bvh2.node_count == 0) {
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: the single scheme needs the BVH2 (not built)");
     }
     job.width = opt->width > 0 ? opt->width : scene->camera.width;
     job.height = opt->height > 0 ? opt->height : scene->camera.height;

@@ -55,15 +55,18 @@ typedef struct lanes_render_result {
     uint64_t secondary_by_depth[LANES_MAX_DEPTH + 1]; /* reflection/refraction rays of each bounce */
 } lanes_render_result;
 
-/* The acceleration structures a render needs: the BVH2 and, for the wide
- * scheme, the wide BVH of the chosen set's width. */
+/* The acceleration structure a render needs: the wide BVH of a set for the
+ * wide scheme, else the BVH2 (single ray and packets). */
 typedef struct lanes_render_accel {
-    lanes_bvh2 bvh2;
+    lanes_bvh2 bvh2;        /* node_count 0 when not built */
     lanes_wbvh wide;        /* width == the set's wide_width, or 0 when not built */
 } lanes_render_accel;
 
-lanes_status lanes_render_accel_build(const lanes_scene *scene, int wide_width, int threads,
-                                      lanes_render_accel *a, lanes_error *err);
+/* wide_for: the set whose wide BVH to build (lanes_wbvh_build), or NULL;
+ * bvh2: build the BVH2 too (the single scheme and the packet renderer read
+ * it). At least one of them. */
+lanes_status lanes_render_accel_build(const lanes_scene *scene, const lanes_kernels *wide_for, bool bvh2,
+                                      int threads, lanes_render_accel *a, lanes_error *err);
 void lanes_render_accel_free(lanes_render_accel *a);
 
 /* A public-API accel over the scene's triangles (prim_id = scene triangle

@@ -235,19 +235,22 @@ LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
                        want_uv);
 }
 
-/* One ray against the triangles i .. i+LANES_W-1. Unaligned loads: a BVH
- * leaf's triangles start anywhere in the leaf-ordered arrays. */
+/* One ray against LANES_W triangles at once, from SoA triangle arrays
+ * (ray_vs_tris: unaligned, a BVH2 leaf's triangles start anywhere) or from
+ * a wide BVH's leaf block (ray_vs_block: aligned). field[vtx][a] is the SoA
+ * field (v0x .. v2z = 0 .. 8) of vertex vtx's axis a, the axes permuted for
+ * the watertight test. */
 typedef struct {
-    const float *v[3][3]; /* [vertex][axis], axes permuted for the watertight test */
+    int field[3][3];
+    const float *soa[9];
     vfloat ox, oy, oz, dx, dy, dz, sx, sy, sz, tnear, tfar;
 } wide_setup;
 
+/* t may be NULL when only blocks are tested. */
 static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ray,
                                         const lanes_triangles *t)
 {
     wide_setup w;
-    const float *axes[3][3] = {{t->v0x, t->v0y, t->v0z}, {t->v1x, t->v1y, t->v1z},
-                               {t->v2x, t->v2y, t->v2z}};
     int order[3] = {0, 1, 2};
     float o[3] = {ray->o[0], ray->o[1], ray->o[2]};
     float sx = 0.0f, sy = 0.0f, sz = 0.0f;
@@ -257,8 +260,14 @@ static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ra
         sx = s.sx, sy = s.sy, sz = s.sz;
         o[0] = ray->o[s.kx], o[1] = ray->o[s.ky], o[2] = ray->o[s.kz];
     }
+    const float *soa[9] = {NULL};
+    if (t) {
+        const float *all[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
+        memcpy(soa, all, sizeof soa);
+    }
+    memcpy(w.soa, soa, sizeof w.soa);
     for (int vtx = 0; vtx < 3; vtx++)
-        for (int a = 0; a < 3; a++) w.v[vtx][a] = axes[vtx][order[a]];
+        for (int a = 0; a < 3; a++) w.field[vtx][a] = vtx * 3 + order[a];
     w.ox = vf_set1(o[0]), w.oy = vf_set1(o[1]), w.oz = vf_set1(o[2]);
     w.dx = vf_set1(ray->d[0]), w.dy = vf_set1(ray->d[1]), w.dz = vf_set1(ray->d[2]);
     w.sx = vf_set1(sx), w.sy = vf_set1(sy), w.sz = vf_set1(sz);
@@ -266,16 +275,9 @@ static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ra
     return w;
 }
 
-LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size_t i, vfloat tfar,
-                                  vmask live, bool want_uv)
+LANES_BODY tri_result ray_vs_vectors(lanes_tri_algo algo, const wide_setup *w, vfloat v[3][3],
+                                     vfloat tfar, vmask live, bool want_uv)
 {
-    vfloat v[3][3];
-    for (int k = 0; k < 3; k++)
-        for (int a = 0; a < 3; a++) v[k][a] = vf_loadu(w->v[k][a] + i);
-    /* degenerate triangles are never hit (see tri_degenerate); the test is
-     * the same whatever order the axes are in */
-    live = vm_and(live, tris_have_area(v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
-                                       v[2][1], v[2][2]));
     if (algo == LANES_TRI_WATERTIGHT)
         return watertight_core(vf_sub(v[0][0], w->ox), vf_sub(v[0][1], w->oy), vf_sub(v[0][2], w->oz),
                                vf_sub(v[1][0], w->ox), vf_sub(v[1][1], w->oy), vf_sub(v[1][2], w->oz),
@@ -283,6 +285,31 @@ LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size
                                w->sx, w->sy, w->sz, w->tnear, tfar, live, want_uv);
     return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, v[0][0], v[0][1], v[0][2], v[1][0],
                        v[1][1], v[1][2], v[2][0], v[2][1], v[2][2], w->tnear, tfar, live, want_uv);
+}
+
+LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size_t i, vfloat tfar,
+                                  vmask live, bool want_uv)
+{
+    vfloat v[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++) v[k][a] = vf_loadu(w->soa[w->field[k][a]] + i);
+    /* degenerate triangles are never hit (see tri_degenerate); the test is
+     * the same whatever order the axes are in */
+    live = vm_and(live, tris_have_area(v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
+                                       v[2][1], v[2][2]));
+    return ray_vs_vectors(algo, w, v, tfar, live, want_uv);
+}
+
+/* Lanes k .. k+LANES_W-1 of a leaf block whose fields are `stride` floats
+ * apart. The build gave padding lanes and triangles of no area NaN
+ * vertices, so every lane is tested and those miss. */
+LANES_BODY tri_result ray_vs_block(lanes_tri_algo algo, const wide_setup *w, const float *block,
+                                   size_t stride, size_t k, vfloat tfar, bool want_uv)
+{
+    vfloat v[3][3];
+    for (int c = 0; c < 3; c++)
+        for (int a = 0; a < 3; a++) v[c][a] = vf_load(block + (size_t)w->field[c][a] * stride + k);
+    return ray_vs_vectors(algo, w, v, tfar, vm_true(), want_uv);
 }
 
 /* Closest hit: the ray's tfar shrinks to the best t so far, so later
