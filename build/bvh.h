@@ -41,7 +41,7 @@ typedef struct lanes_bvh2 {
     /* The build options' costs, kept so the collapse and the reports use
      * the same cost model as the build. */
     float traversal_cost, intersect_cost;
-    int sah_block;
+    int sah_block;          /* the option's: leaves cost per block of this many */
     int threads;            /* threads the build ran on */
 } lanes_bvh2;
 
@@ -129,8 +129,8 @@ static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t blo
 
 /* Collapses by repeatedly replacing the child with the largest surface area
  * by its own children until `width` are present (SAH-guided collapse).
- * Leaves are BVH2 leaves, unchanged. Ties go to the earlier slot; the two
- * children of an opened node take its slot and the next, so slots keep the
+ * Each leaf slot holds one BVH2 leaf's triangles, in blocks. Ties go to the
+ * earlier slot; the two children of an opened node take its slot and the next, so slots keep the
  * BVH2's left-to-right order, and empty slots come last. The interior
  * children of a wide node have consecutive indices, greater than its own;
  * the root is node 0. A BVH2 whose root is a leaf gives one wide node
