@@ -87,11 +87,13 @@ typedef struct lanes_scene {
 
 /* Memory per triangle, for refusing absurd sizes before the kernel's OOM
  * killer does (the loaders' budget, lanes_scene_limit_to_memory, counts
- * both, since a scene is loaded to be traced): a scene holds 9 floats and a material index;
- * building its BVH2 and wide BVH peaks at about 185 bytes more (measured:
- * `lanes render` of 13.1M triangles, 2.95 GB resident). */
+ * both, since a scene is loaded to be traced): a scene holds 9 floats and a
+ * material index; building its acceleration structure peaks at about 272
+ * bytes more (measured: `lanes render hairball --scheme wide`, 2.88M
+ * triangles, 899 MB resident at most; the BVH2 alone, --scheme single,
+ * peaks at 715 MB). */
 #define LANES_SCENE_BYTES_PER_TRIANGLE ((size_t)(9 * 4 + 4))
-#define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)192)
+#define LANES_ACCEL_BYTES_PER_TRIANGLE ((size_t)272)
 
 /* The loaders keep |coordinate| <= LANES_SCENE_MAX_COORD, for what the
  * renderer computes from coordinates: a light's falloff squares a distance
