@@ -99,7 +99,6 @@ typedef struct lanes_wbvh {
     unsigned char *blocks;
     size_t block_count;
     size_t prim_count;      /* triangles in the leaves (padding lanes not counted) */
-    size_t skipped;         /* scene triangles left out (as lanes_bvh2.skipped) */
     double build_seconds;   /* lanes_wbvh_build: BVH2 and collapse; else the collapse */
     double collapse_seconds;
     double sah_cost;        /* with the BVH2's costs */

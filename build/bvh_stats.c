@@ -63,6 +63,7 @@ bool lanes_bvh2_stats(const lanes_bvh2 *bvh, float traversal_cost, float interse
     if (!bvh || !bvh->nodes || bvh->node_count == 0) return false;
     const lanes_bvh2_node *nd = bvh->nodes;
     const size_t nn = bvh->node_count;
+    const uint32_t blk = bvh->sah_block > 0 ? (uint32_t)bvh->sah_block : 1; /* 0: a tree not built here */
     walk_stack s = {0};
     bool ok = push(&s, 0, 1);
     size_t visited = 0;
@@ -81,8 +82,7 @@ bool lanes_bvh2_stats(const lanes_bvh2 *bvh, float traversal_cost, float interse
             st->leaves++;
             st->prims += n->count;
             if (n->count > st->max_leaf_size) st->max_leaf_size = n->count;
-            int blk = bvh->sah_block > 0 ? bvh->sah_block : 1;
-            sum += (double)intersect_cost * ((n->count + (uint32_t)blk - 1) / (uint32_t)blk) * a;
+            sum += (double)intersect_cost * ((n->count + blk - 1) / blk) * a;
         } else {
             st->interior++;
             sum += (double)traversal_cost * a;

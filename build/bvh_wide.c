@@ -72,17 +72,6 @@ typedef struct fill_ctx {
     double root_area;   /* written by block 0 */
 } fill_ctx;
 
-/* Exactly the test the kernels would make per ray (see triangle_core.h),
- * in the same float operations (no contraction), so skipping it there
- * changes no result. */
-static bool no_area(const float v[9])
-{
-    float e1[3], e2[3];
-    for (int a = 0; a < 3; a++) e1[a] = v[3 + a] - v[a], e2[a] = v[6 + a] - v[a];
-    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
-           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
-}
-
 /* The blocks of one leaf: triangles [first, first + count) of the BVH2's
  * leaf order, from block `block` on. */
 static void fill_leaf(const lanes_bvh2 *bvh, lanes_wbvh *out, uint32_t block, uint32_t first, uint32_t count)
@@ -94,12 +83,16 @@ static void fill_leaf(const lanes_bvh2 *bvh, lanes_wbvh *out, uint32_t block, ui
         float *v = (float *)(void *)(out->blocks + block * lanes_wblock_bytes(out->width));
         uint32_t *prim = (uint32_t *)(void *)(v + 9 * W);
         for (size_t j = 0; j < W; j++) {
-            float tv[9];
+            lanes_triangle tri;
             bool real = k + j < count;
-            for (int c = 0; c < 9; c++) tv[c] = real ? soa[c][first + k + j] : NAN;
-            if (real && no_area(tv))
-                for (int c = 0; c < 9; c++) tv[c] = NAN;
-            for (int c = 0; c < 9; c++) v[c * W + j] = tv[c];
+            for (int c = 0; c < 3; c++) {
+                tri.v0[c] = real ? soa[c][first + k + j] : NAN;
+                tri.v1[c] = real ? soa[3 + c][first + k + j] : NAN;
+                tri.v2[c] = real ? soa[6 + c][first + k + j] : NAN;
+            }
+            bool hide = !real || lanes_triangle_no_area(&tri);
+            const float *vert[3] = {tri.v0, tri.v1, tri.v2};
+            for (int c = 0; c < 9; c++) v[c * W + j] = hide ? NAN : vert[c / 3][c % 3];
             prim[j] = real ? bvh->prim_index[first + k + j] : LANES_NO_HIT;
         }
     }
@@ -303,7 +296,6 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
         return fail(err, why);
     }
     out->sah_cost = root_area > 0.0 ? sah / root_area : 0.0;
-    out->skipped = bvh->skipped;
     out->collapse_seconds = now_seconds() - t0;
     out->build_seconds = out->collapse_seconds;
     return LANES_OK;

@@ -57,6 +57,21 @@ typedef struct lanes_triangles {
     size_t count, capacity;
 } lanes_triangles;
 
+/* A triangle whose edge vectors have an exactly zero cross product
+ * (repeated vertices, vertices on one axis-parallel line, ...) has no area
+ * and is never hit: without this, rounding can give it a nonzero
+ * determinant. The products of the cross product round alike when equal,
+ * so an exact zero stays zero; a near-degenerate sliver is still tested.
+ * Plain float operations (no contraction), so the wide BVH's build, which
+ * replaces such triangles by NaN, and the kernels agree exactly. */
+static inline bool lanes_triangle_no_area(const lanes_triangle *t)
+{
+    float e1[3], e2[3];
+    for (int a = 0; a < 3; a++) e1[a] = t->v1[a] - t->v0[a], e2[a] = t->v2[a] - t->v0[a];
+    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
+           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
+}
+
 /* Results of the per-element triangle kernels. */
 typedef struct lanes_tri_hits {
     float *t, *u, *v; /* u, v: barycentric weights of v1 and v2 */

@@ -91,7 +91,9 @@ LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, int slab, fl
 enum { NODE_BYTES = (WIDE_WIDTH * 28 + 63) / 64 * 64, BLOCK_BYTES = (WIDE_WIDTH * 40 + 31) / 32 * 32 };
 
 /* Real triangles among lanes k .. k+LANES_W-1 of a block (padding comes
- * last), for the counters. */
+ * last, lane 0 is always a triangle, so the leaf loops below read prim[]
+ * only past it: sets as wide as the block never touch that cache line
+ * before a hit), for the counters. */
 static inline vmask block_live(const uint32_t *prim, int k)
 {
     int n = 0;
@@ -127,8 +129,8 @@ LANES_BODY bool leaf_closest(lanes_tri_algo algo, const wide_setup *w, const uns
     for (uint32_t b = 0; b < nblocks; b++, blk += BLOCK_BYTES) {
         const float *v = (const float *)(const void *)blk;
         const uint32_t *prim = (const uint32_t *)(const void *)(v + 9 * WIDE_WIDTH);
-        for (int k = 0; k < WIDE_WIDTH && prim[k] != LANES_NO_HIT; k += LANES_W) {
-            tri_result h = ray_vs_block(algo, w, v, WIDE_WIDTH, (size_t)k, vf_set1(*tfar), true);
+        for (int k = 0; k < WIDE_WIDTH && (k == 0 || prim[k] != LANES_NO_HIT); k += LANES_W) {
+            tri_result h = ray_vs_block(algo, w, v, (size_t)k, vf_set1(*tfar), true);
             if (stats) {
                 vmask live = block_live(prim, k);
                 stats->triangles_tested += (uint64_t)vm_popcount(live);
@@ -149,8 +151,8 @@ LANES_BODY bool leaf_any(lanes_tri_algo algo, const wide_setup *w, const unsigne
     for (uint32_t b = 0; b < nblocks; b++, blk += BLOCK_BYTES) {
         const float *v = (const float *)(const void *)blk;
         const uint32_t *prim = (const uint32_t *)(const void *)(v + 9 * WIDE_WIDTH);
-        for (int k = 0; k < WIDE_WIDTH && prim[k] != LANES_NO_HIT; k += LANES_W) {
-            tri_result h = ray_vs_block(algo, w, v, WIDE_WIDTH, (size_t)k, w->tfar, false);
+        for (int k = 0; k < WIDE_WIDTH && (k == 0 || prim[k] != LANES_NO_HIT); k += LANES_W) {
+            tri_result h = ray_vs_block(algo, w, v, (size_t)k, w->tfar, false);
             if (stats) {
                 vmask live = block_live(prim, k);
                 stats->triangles_tested += (uint64_t)vm_popcount(live);

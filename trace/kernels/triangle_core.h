@@ -195,19 +195,6 @@ LANES_BODY tri_result watertight_packet_core(const lanes_vray *r, const lanes_tr
                            want_uv);
 }
 
-/* A triangle whose edge vectors have an exactly zero cross product (repeated
- * vertices, vertices on one axis-parallel line, ...) has no area and is
- * never hit: without this, rounding can give it a nonzero determinant. The
- * products of the cross product round alike when equal, so an exact zero
- * stays zero; a near-degenerate sliver is still tested. */
-static inline bool tri_degenerate(const lanes_triangle *t)
-{
-    float e1[3], e2[3];
-    for (int a = 0; a < 3; a++) e1[a] = t->v1[a] - t->v0[a], e2[a] = t->v2[a] - t->v0[a];
-    return e1[1] * e2[2] - e1[2] * e2[1] == 0.0f && e1[2] * e2[0] - e1[0] * e2[2] == 0.0f &&
-           e1[0] * e2[1] - e1[1] * e2[0] == 0.0f;
-}
-
 LANES_BODY vmask tris_have_area(vfloat ax, vfloat ay, vfloat az, vfloat bx, vfloat by, vfloat bz,
                                 vfloat cx, vfloat cy, vfloat cz)
 {
@@ -223,7 +210,7 @@ LANES_BODY vmask tris_have_area(vfloat ax, vfloat ay, vfloat az, vfloat bx, vflo
 LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
                                   const lanes_triangle *tri, bool want_uv)
 {
-    if (tri_degenerate(tri)) {
+    if (lanes_triangle_no_area(tri)) {
         tri_result none = {vf_zero(), vf_zero(), vf_zero(), vm_false()};
         return none;
     }
@@ -260,12 +247,11 @@ static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ra
         sx = s.sx, sy = s.sy, sz = s.sz;
         o[0] = ray->o[s.kx], o[1] = ray->o[s.ky], o[2] = ray->o[s.kz];
     }
-    const float *soa[9] = {NULL};
+    memset(w.soa, 0, sizeof w.soa);
     if (t) {
         const float *all[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
-        memcpy(soa, all, sizeof soa);
+        memcpy(w.soa, all, sizeof w.soa);
     }
-    memcpy(w.soa, soa, sizeof w.soa);
     for (int vtx = 0; vtx < 3; vtx++)
         for (int a = 0; a < 3; a++) w.field[vtx][a] = vtx * 3 + order[a];
     w.ox = vf_set1(o[0]), w.oy = vf_set1(o[1]), w.oz = vf_set1(o[2]);
@@ -293,22 +279,22 @@ LANES_BODY tri_result ray_vs_tris(lanes_tri_algo algo, const wide_setup *w, size
     vfloat v[3][3];
     for (int k = 0; k < 3; k++)
         for (int a = 0; a < 3; a++) v[k][a] = vf_loadu(w->soa[w->field[k][a]] + i);
-    /* degenerate triangles are never hit (see tri_degenerate); the test is
+    /* degenerate triangles are never hit (see lanes_triangle_no_area); the test is
      * the same whatever order the axes are in */
     live = vm_and(live, tris_have_area(v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
                                        v[2][1], v[2][2]));
     return ray_vs_vectors(algo, w, v, tfar, live, want_uv);
 }
 
-/* Lanes k .. k+LANES_W-1 of a leaf block whose fields are `stride` floats
- * apart. The build gave padding lanes and triangles of no area NaN
+/* Lanes k .. k+LANES_W-1 of a leaf block of LANES_WIDE_WIDTH triangles
+ * (its fields that many floats apart). The build gave padding lanes and triangles of no area NaN
  * vertices, so every lane is tested and those miss. */
 LANES_BODY tri_result ray_vs_block(lanes_tri_algo algo, const wide_setup *w, const float *block,
-                                   size_t stride, size_t k, vfloat tfar, bool want_uv)
+                                   size_t k, vfloat tfar, bool want_uv)
 {
     vfloat v[3][3];
     for (int c = 0; c < 3; c++)
-        for (int a = 0; a < 3; a++) v[c][a] = vf_load(block + (size_t)w->field[c][a] * stride + k);
+        for (int a = 0; a < 3; a++) v[c][a] = vf_load(block + (size_t)w->field[c][a] * LANES_WIDE_WIDTH + k);
     return ray_vs_vectors(algo, w, v, tfar, vm_true(), want_uv);
 }
 
