@@ -95,6 +95,7 @@ typedef struct {
      * LANES_PACKET_MAX_RAYS consecutive rays; their t range is restored
      * from tnear0/tfar0 before each run (traversal shrinks tfar) */
     bool packet;
+    bool hybrid; /* packets of the set's width through the wide BVH */
     lanes_rays soa;
     float *tnear0, *tfar0, *u, *v;
     uint32_t *prim;
@@ -166,6 +167,13 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     const lanes_job *j = ctx;
     if (j->packet) {
         packet_work(j, b, e);
+        return;
+    }
+    if (j->hybrid) {
+        if (j->occlusion)
+            j->k->occluded_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
+        else
+            j->k->trace_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
         return;
     }
     if (j->occlusion) {
@@ -314,7 +322,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
 {
     bool occl = kind == KIND_SHADOW;
     size_t nn = n ? n : 1;
-    config *cfg = calloc(LANES_ISA_COUNT * (LANES_SCHEME_COUNT + 1) + 2 * LANES_EMBREE_METHOD_COUNT,
+    config *cfg = calloc(LANES_ISA_COUNT * (LANES_SCHEME_COUNT + 2) + 2 * LANES_EMBREE_METHOD_COUNT,
                          sizeof *cfg);
     lanes_embree_batch batches[LANES_EMBREE_METHOD_COUNT];
     bool have_batch[LANES_EMBREE_METHOD_COUNT] = {false};
@@ -343,6 +351,17 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             snprintf(cf->name, sizeof cf->name, "%s", lanes_scheme_name((lanes_scheme)sc));
             snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
         }
+        /* hybrid packets: LANES_W consecutive rays (a 2x2, 2x4 or 4x4
+         * pixel block of a tile for camera rays) through the wide BVH */
+        config *hc = &cfg[ncfg++];
+        hc->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_WIDE, .bvh2 = &c->bvh2,
+                             .wide = &c->wide[width_slot(k->wide_width)], .rays = mode_rays,
+                             .accuracy = c->opt.accuracy, .occlusion = occl, .hybrid = true};
+        hc->lj.hits = occl ? NULL : malloc(nn * sizeof *hc->lj.hits);
+        hc->lj.occluded = occl ? malloc(nn) : NULL;
+        if (!hc->lj.hits && !hc->lj.occluded) cli_fail("compare: out of memory");
+        snprintf(hc->name, sizeof hc->name, "hybrid");
+        snprintf(hc->isa, sizeof hc->isa, "%s", k->name);
         /* packets of 1024 consecutive rays (camera rays come in 8x8 pixel
          * tiles, so a packet is a strip of 16 tiles), partition traversal
          * of the BVH2 with the packet frustum built inside the clock */
@@ -414,7 +433,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     else
         lanes_embree_batch_hits(&batches[LANES_EMBREE_1], ref_hits);
     for (int i = 0; i < ncfg; i++) {
-        if (cfg[i].embree || cfg[i].lj.packet || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
+        if (cfg[i].embree || cfg[i].lj.packet || cfg[i].lj.hybrid || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
         agreement *a = &c->res.agree[c->res.agree_count++];
         a->isa = cfg[i].lj.k->isa;
         a->kind = kind;

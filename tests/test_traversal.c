@@ -1,10 +1,13 @@
-/* The single-ray traversals (trace_wide, occluded_wide, trace_bvh2,
- * occluded_bvh2) of every supported kernel set, with both triangle tests,
- * against two references:
+/* The traversals (trace_wide, occluded_wide, trace_bvh2, occluded_bvh2,
+ * and the hybrid packets trace_hybrid, occluded_hybrid) of every supported
+ * kernel set, with both triangle tests, against two references:
  *
  *  brute  (small scenes, BVHs with leaves of at most 1, 4 and 12
  *         triangles): every triangle tested with the same set's own
- *         triangle kernel. The traversal must find exactly what the brute
+ *         triangle kernel (the hybrid packets also against trace_wide, on
+         those rays and on camera rays in 4x4 pixel blocks, whose
+         packets stay together: the same t bit for bit, the same
+         answer to occlusion). The traversal must find exactly what the brute
  *         force finds: the same t bit for bit, the same triangle unless
  *         another one is hit at exactly that t (a tie, which either may
  *         report), and occlusion iff a closest hit exists. Since both sides
@@ -187,6 +190,35 @@ static void point_on(const lanes_scene *s, size_t tri, double b1, double b2, flo
     const float *v = s->verts + 9 * tri;
     for (int a = 0; a < 3; a++)
         p[a] = (float)((1.0 - b1 - b2) * v[a] + b1 * v[3 + a] + b2 * v[6 + a]);
+}
+
+/* Camera rays through a side x side grid over the scene's bounds, from
+ * in front of it, in 4x4 pixel blocks: consecutive rays are neighbours, as
+ * the hybrid packets want them. The image's middle row and column have
+ * direction components of both signs within a block. */
+static size_t make_camera_rays(const lanes_scene *s, lanes_ray *rays, size_t side)
+{
+    float lo[3], hi[3], size;
+    bounds(s, lo, hi, &size);
+    float eye[3] = {0.5f * (lo[0] + hi[0]), 0.5f * (lo[1] + hi[1]), lo[2] - 1.5f * size};
+    size_t n = 0;
+    for (size_t by = 0; by < side; by += 4)
+        for (size_t bx = 0; bx < side; bx += 4)
+            for (size_t y = by; y < by + 4 && y < side; y++)
+                for (size_t x = bx; x < bx + 4 && x < side; x++) {
+                    float target[3] = {lo[0] + (hi[0] - lo[0]) * ((float)x + 0.5f) / (float)side,
+                                       lo[1] + (hi[1] - lo[1]) * ((float)y + 0.5f) / (float)side,
+                                       0.5f * (lo[2] + hi[2])};
+                    lanes_ray *r = &rays[n++];
+                    memset(r, 0, sizeof *r);
+                    for (int a = 0; a < 3; a++) {
+                        r->o[a] = eye[a];
+                        r->d[a] = target[a] - eye[a];
+                    }
+                    r->tnear = 0.0f;
+                    r->tfar = INFINITY;
+                }
+    return n;
 }
 
 static const char *const ray_kind_names[10] = {
@@ -533,6 +565,55 @@ static bool occlusion_ok(verdict v, long b, const lanes_hit *h, bool occluded)
     return (v == V_OUTSIDE_BOX || v == V_BOX_EDGE) && occluded == (h->prim != LANES_NO_HIT);
 }
 
+/* The hybrid packets against trace_wide on the same rays: the same t bit for
+ * bit, the same triangle (then also u, v bit for bit), the same occlusion,
+ * except where the visiting order decides, which a packet may change: a tie
+ * between leaves (another triangle at exactly that t), or a hit whose float t
+ * lies outside its triangle's box, or on its boundary, so that the box is
+ * culled in one order and not in the other. Such a ray is judged by the
+ * brute force as in brute_scene, both answers; *explained counts them. */
+static void check_hybrid(const lanes_kernels *k, const lanes_wbvh *w, lanes_accuracy acc,
+                         const lanes_triangles *tris, const lanes_ray *rays, size_t n, const char *what,
+                         size_t *explained)
+{
+    lanes_hit *hw = malloc(n * sizeof *hw), *hh = malloc(n * sizeof *hh);
+    uint8_t *ow = malloc(n), *oh = malloc(n);
+    if (!hw || !hh || !ow || !oh) {
+        harness_fail("out of memory");
+        free(hw), free(hh), free(ow), free(oh);
+        return;
+    }
+    const lanes_tri_algo algo = lanes_accuracy_precision(acc).algo;
+    k->trace_wide(w, acc, rays, n, hw, NULL);
+    k->occluded_wide(w, acc, rays, n, ow, NULL);
+    k->trace_hybrid(w, acc, rays, n, hh, NULL);
+    k->occluded_hybrid(w, acc, rays, n, oh, NULL);
+    size_t bad = 0;
+    for (size_t r = 0; r < n; r++) {
+        bool same = memcmp(&hw[r].t, &hh[r].t, sizeof hw[r].t) == 0 && hw[r].prim == hh[r].prim &&
+                    memcmp(&hw[r].u, &hh[r].u, sizeof hw[r].u) == 0 &&
+                    memcmp(&hw[r].v, &hh[r].v, sizeof hw[r].v) == 0 && ow[r] == oh[r];
+        if (same) continue;
+        float bt = 0.0f, bu = 0.0f, bv = 0.0f;
+        long b = k->tri_wide_closest[algo](&rays[r], tris, tris->count, &bt, &bu, &bv, NULL);
+        verdict vw = judge(k, acc, tris, &rays[r], b, bt, bu, bv, &hw[r]);
+        verdict vh = judge(k, acc, tris, &rays[r], b, bt, bu, bv, &hh[r]);
+        bool ok = vw != V_WRONG && vh != V_WRONG && occlusion_ok(vw, b, &hw[r], ow[r] != 0) &&
+                  occlusion_ok(vh, b, &hh[r], oh[r] != 0);
+        if (ok) {
+            (*explained)++;
+        } else if (++bad <= 5) {
+            harness_fail("%s %s %s: ray %zu: hybrid prim %d t=%.9g occluded %d, wide prim %d t=%.9g "
+                         "occluded %d, brute force prim %ld t=%.9g",
+                         what, k->name, lanes_accuracy_name(acc), r,
+                         hh[r].prim == LANES_NO_HIT ? -1 : (int)hh[r].prim, hh[r].t, oh[r],
+                         hw[r].prim == LANES_NO_HIT ? -1 : (int)hw[r].prim, hw[r].t, ow[r], b, bt);
+        }
+    }
+    if (bad > 5) harness_fail("%s %s %s: %zu rays differ in all", what, k->name, lanes_accuracy_name(acc), bad);
+    free(hw), free(hh), free(ow), free(oh);
+}
+
 static void brute_scene(const lanes_scene *s, size_t nrays)
 {
     long fail0 = harness.failures;
@@ -564,8 +645,12 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
     float *bt = malloc(nrays * sizeof *bt), *bu = malloc(nrays * sizeof *bu),
           *bv = malloc(nrays * sizeof *bv);
     make_rays(s, rays, nrays, harness_rng_seed(0xabcdef + s->triangle_count));
+    enum { CAM_SIDE = 64 };
+    lanes_ray *cam = malloc(CAM_SIDE * CAM_SIDE * sizeof *cam), *cam_mode = malloc(CAM_SIDE * CAM_SIDE * sizeof *cam);
+    size_t ncam = cam ? make_camera_rays(s, cam, CAM_SIDE) : 0;
 
     size_t ties = 0, outside = 0, edges = 0, hits_total = 0, checks = 0, by_kind[10] = {0};
+    size_t hybrid_order = 0; /* hybrid and wide differ where the visiting order decides */
     dstats ds = {0, 0, 0, 0};
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
@@ -593,11 +678,16 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
 
             for (int l = 0; l < LEAF_SIZES; l++) {
                 const lanes_wbvh *w = &wide[l][width_slot(k->wide_width)];
-                for (int scheme = 0; scheme < 2; scheme++) {
-                    const char *sn = scheme ? "bvh2" : "wide";
+                for (int scheme = 0; scheme < 3; scheme++) {
+                    const char *sn = scheme == 2 ? "hybrid" : scheme ? "bvh2" : "wide";
                     lanes_trace_stats stats;
                     memset(&stats, 0, sizeof stats);
-                    if (scheme) {
+                    if (scheme == 2) {
+                        k->trace_hybrid(w, acc, mode_rays, nrays, hits, NULL);
+                        k->trace_hybrid(w, acc, mode_rays, nrays, hits2, &stats);
+                        k->occluded_hybrid(w, acc, mode_rays, nrays, occ, NULL);
+                        k->occluded_hybrid(w, acc, mode_rays, nrays, occ2, &stats);
+                    } else if (scheme) {
                         k->trace_bvh2(&bvh[l], acc, mode_rays, nrays, hits, NULL);
                         k->trace_bvh2(&bvh[l], acc, mode_rays, nrays, hits2, &stats);
                         k->occluded_bvh2(&bvh[l], acc, mode_rays, nrays, occ, NULL);
@@ -642,16 +732,23 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                         }
                     }
                 }
+                check_hybrid(k, w, acc, &tris, mode_rays, nrays, s->name, &hybrid_order);
+                for (size_t r = 0; r < ncam; r++) {
+                    cam_mode[r] = cam[r];
+                    lanes_ray_prepare_rcp(&cam_mode[r], lanes_accuracy_precision(acc).rcp);
+                }
+                check_hybrid(k, w, acc, &tris, cam_mode, ncam, "camera rays", &hybrid_order);
             }
         }
     }
     printf("%-8s %6zu triangles, %zu rays: %zu traversal results checked, %zu closest hits in "
            "the brute force, %zu ties resolved to another triangle at the same t, %zu where the "
            "brute force's t lies outside its triangle's box, %zu lost on a box boundary (fast and "
-           "default modes); double "
+           "default modes), %zu where the hybrid packets and trace_wide differ by the visiting "
+           "order; double "
            "reference (both algorithms): %zu differ (%zu ties, %zu in the rounding band, %zu "
            "other) -> %s\n",
-           s->name, s->triangle_count, nrays, checks, hits_total, ties, outside, edges,
+           s->name, s->triangle_count, nrays, checks, hits_total, ties, outside, edges, hybrid_order,
            ds.ties + ds.grazing + ds.other, ds.ties, ds.grazing, ds.other,
            harness.failures == fail0 && ds.other == 0 ? "ok" : "FAIL");
     if (harness.failures != fail0) {
@@ -666,6 +763,7 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
           ds.other);
 
     free(rays), free(mode_rays), free(hits), free(hits2), free(occ), free(occ2), free(brute), free(bt), free(bu), free(bv);
+    free(cam), free(cam_mode);
     lanes_triangles_free(&tris);
     for (int l = 0; l < LEAF_SIZES; l++) {
         for (int w = 0; w < 3; w++) lanes_wbvh_free(&wide[l][w]);

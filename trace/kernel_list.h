@@ -119,6 +119,21 @@
        size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
       (b, accuracy, rays, n, occluded))
 
+/* hybrid_kernels.c: n prepared rays as packets of LANES_W consecutive rays
+ * through the same wide BVH as trace_wide, SIMD across a packet's rays at
+ * each node until few of them are left, then one ray at a time (hybrid
+ * traversal). Same hits as trace_wide, except where the visiting order
+ * decides (ties between leaves, hits on a box's rounding boundary). */
+#define LANES_KERNELS_HYBRID(X)                                                            \
+    X(COUNTED_VOID, void, trace_hybrid,                                                    \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
+      (w, accuracy, rays, n, hits))                                                        \
+    X(COUNTED_VOID, void, occluded_hybrid,                                                 \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
+      (w, accuracy, rays, n, occluded))
+
 /* packet_kernels.c: one packet of rays->count (<= LANES_PACKET_MAX_RAYS)
  * prepared rays through the BVH2. Closest hit: each ray's tfar shrinks to
  * its hit distance, and prim[i], u[i], v[i] are written for rays that hit
@@ -137,6 +152,7 @@
     LANES_KERNELS_TRI(X)                                                                   \
     LANES_KERNELS_FRUSTUM(X)                                                               \
     LANES_KERNELS_TRAVERSE(X)                                                              \
+    LANES_KERNELS_HYBRID(X)                                                                \
     LANES_KERNELS_PACKET(X)
 
 /* The lanes_kernels member of a row. */

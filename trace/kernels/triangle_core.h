@@ -233,11 +233,11 @@ typedef struct {
     vfloat ox, oy, oz, dx, dy, dz, sx, sy, sz, tnear, tfar;
 } wide_setup;
 
-/* t may be NULL when only blocks are tested. */
-static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ray,
-                                        const lanes_triangles *t)
+/* t may be NULL when only blocks are tested. Filled in place: a returned
+ * copy of the struct (hundreds of bytes) costs as much as a leaf test. */
+LANES_BODY void wide_setup_init(wide_setup *w, lanes_tri_algo algo, const lanes_ray *ray,
+                                const lanes_triangles *t)
 {
-    wide_setup w;
     int order[3] = {0, 1, 2};
     float o[3] = {ray->o[0], ray->o[1], ray->o[2]};
     float sx = 0.0f, sy = 0.0f, sz = 0.0f;
@@ -247,18 +247,17 @@ static inline wide_setup wide_setup_ray(lanes_tri_algo algo, const lanes_ray *ra
         sx = s.sx, sy = s.sy, sz = s.sz;
         o[0] = ray->o[s.kx], o[1] = ray->o[s.ky], o[2] = ray->o[s.kz];
     }
-    memset(w.soa, 0, sizeof w.soa);
+    memset(w->soa, 0, sizeof w->soa);
     if (t) {
         const float *all[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
-        memcpy(w.soa, all, sizeof w.soa);
+        memcpy(w->soa, all, sizeof w->soa);
     }
     for (int vtx = 0; vtx < 3; vtx++)
-        for (int a = 0; a < 3; a++) w.field[vtx][a] = vtx * 3 + order[a];
-    w.ox = vf_set1(o[0]), w.oy = vf_set1(o[1]), w.oz = vf_set1(o[2]);
-    w.dx = vf_set1(ray->d[0]), w.dy = vf_set1(ray->d[1]), w.dz = vf_set1(ray->d[2]);
-    w.sx = vf_set1(sx), w.sy = vf_set1(sy), w.sz = vf_set1(sz);
-    w.tnear = vf_set1(ray->tnear), w.tfar = vf_set1(ray->tfar);
-    return w;
+        for (int a = 0; a < 3; a++) w->field[vtx][a] = vtx * 3 + order[a];
+    w->ox = vf_set1(o[0]), w->oy = vf_set1(o[1]), w->oz = vf_set1(o[2]);
+    w->dx = vf_set1(ray->d[0]), w->dy = vf_set1(ray->d[1]), w->dz = vf_set1(ray->d[2]);
+    w->sx = vf_set1(sx), w->sy = vf_set1(sy), w->sz = vf_set1(sz);
+    w->tnear = vf_set1(ray->tnear), w->tfar = vf_set1(ray->tfar);
 }
 
 LANES_BODY tri_result ray_vs_vectors(lanes_tri_algo algo, const wide_setup *w, vfloat v[3][3],
@@ -305,7 +304,8 @@ LANES_BODY long tri_closest_body(lanes_tri_algo algo, const lanes_ray *ray,
                                  const lanes_triangles *tris, size_t n, float *t, float *u,
                                  float *v, lanes_lane_stats *stats)
 {
-    wide_setup w = wide_setup_ray(algo, ray, tris);
+    wide_setup w;
+    wide_setup_init(&w, algo, ray, tris);
     vfloat tfar = w.tfar;
     float best_t = ray->tfar, best_u = 0.0f, best_v = 0.0f;
     long best = -1;
@@ -335,7 +335,8 @@ LANES_BODY long tri_closest_body(lanes_tri_algo algo, const lanes_ray *ray,
 LANES_BODY bool tri_any_body(lanes_tri_algo algo, const lanes_ray *ray, const lanes_triangles *tris,
                              size_t n, lanes_lane_stats *stats)
 {
-    wide_setup w = wide_setup_ray(algo, ray, tris);
+    wide_setup w;
+    wide_setup_init(&w, algo, ray, tris);
     for (size_t i = 0; i < n; i += LANES_W) {
         vmask live = vm_first_n(n - i);
         tri_result h = ray_vs_tris(algo, &w, i, w.tfar, live, false);

@@ -29,7 +29,8 @@ LANES_BODY size_t tri_wide_body(lanes_tri_algo algo, const lanes_ray *ray,
                                 const lanes_triangles *tris, size_t n, uint32_t *hit,
                                 lanes_tri_hits *out, lanes_lane_stats *stats)
 {
-    wide_setup w = wide_setup_ray(algo, ray, tris);
+    wide_setup w;
+    wide_setup_init(&w, algo, ray, tris);
     size_t hits = 0;
     for (size_t i = 0; i < n; i += LANES_W) {
         vmask live = vm_first_n(n - i);
