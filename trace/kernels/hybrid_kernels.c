@@ -25,16 +25,17 @@
 #define PACKET_RAYS LANES_W
 
 /* A packet goes on together while more than SWITCH_AT of its rays need a
- * node; at or below it they continue as single rays. A packet node test
- * costs one vector test per child where a single ray tests all children in
- * one, so it pays only while nearly every ray uses it: Embree's thresholds
- * (3 of 4, 7 of 8, 14 of 16 rays), measured in lanes compare. */
-#if PACKET_RAYS >= 16
-#define SWITCH_AT 14
-#elif PACKET_RAYS >= 8
-#define SWITCH_AT 7
-#elif PACKET_RAYS >= 4
-#define SWITCH_AT 3
+ * node; at or below it they continue as single rays. Embree switches at 3
+ * of 4, 7 of 8 and 14 of 16 rays; for lanes that was the slowest choice.
+ * Measured on dragon (AMD Zen 5; hybrid/wide, paired medians of 11 runs):
+ * at 14 of 16, primary 0.93x and shadow 0.76x; at 8, 1.13x and 0.98x; at
+ * 1, 1.43x and 1.27x; at 7 of 8, 1.16x and 0.92x; at 1 of 8, 1.26x and
+ * 1.20x. A packet's node test is a frustum test plus one exact test per
+ * child it keeps (2-4 on these scenes), so it beats single rays' one test
+ * per ray while more rays than that are live, and a ray that goes on alone
+ * pays its own set-up at every node where it leaves a packet. */
+#if PACKET_RAYS > 1
+#define SWITCH_AT 1
 #else
 #define SWITCH_AT PACKET_RAYS
 #endif
@@ -63,63 +64,67 @@ static inline uint32_t packet_live(const lanes_ray *rays, size_t m)
     return bits;
 }
 
-/* The packet of rays[0 .. m) with live rays live (not 0). Lanes of dead
+/* The direction octant of a ray: the signs of its 1/d, one bit per axis. */
+static inline unsigned ray_octant(const lanes_ray *r)
+{
+    return (unsigned)(r->rd[0] < 0.0f) | (unsigned)(r->rd[1] < 0.0f) << 1 | (unsigned)(r->rd[2] < 0.0f) << 2;
+}
+
+/* Whether the live rays of a group share an octant. Tested ray by ray
+ * before any set-up: incoherent groups (diffuse rays) differ by the
+ * second ray, so that they cost a few instructions and not a packet's
+ * set-up (which added 5% to diffuse rays, measured by callgrind). */
+static inline bool one_octant(const lanes_ray *rays, uint32_t live)
+{
+    const unsigned first = ray_octant(&rays[__builtin_ctz(live)]);
+    for (uint32_t rest = live & (live - 1); rest; rest &= rest - 1)
+        if (ray_octant(&rays[__builtin_ctz(rest)]) != first) return false;
+    return true;
+}
+
+/* The packet of rays[0 .. m) with live rays live (not 0), which share an
+ * octant (one_octant). Lanes of dead
  * rays repeat a live ray, so that they compute nothing odd. Returns false
- * when the group is better traced ray by ray: its rays point into more
- * than one octant (incoherent: each ray's own nearest-first order beats a
- * common one, and the frustum needs one octant), or, in fast mode, a ray's
+ * when the group is better traced ray by ray: in fast mode, a ray's
  * o * (1/d) overflows, so that it takes the exact slab form while the
  * others take the FMA form, and a packet has one form. */
 LANES_BODY bool packet_setup(const lanes_ray *rays, uint32_t live, lanes_accuracy accuracy, float exit_scale,
                              packet_rays *p, int *slab)
 {
-    float o[3][PACKET_RAYS], rd[3][PACKET_RAYS], ord[3][PACKET_RAYS], tnear[PACKET_RAYS];
-    float omin[3] = {INFINITY, INFINITY, INFINITY}, omax[3] = {-INFINITY, -INFINITY, -INFINITY};
-    float rmin[3] = {INFINITY, INFINITY, INFINITY}, rmax[3] = {-INFINITY, -INFINITY, -INFINITY};
-    bool rfinite[3] = {true, true, true};
-    const size_t first = (size_t)__builtin_ctz(live);
-    p->f_tnear = INFINITY;
-    bool finite = true;
-    int neg_lanes[3] = {0, 0, 0};
-    for (size_t i = 0; i < PACKET_RAYS; i++) {
-        const lanes_ray *r = &rays[live & (1u << i) ? i : first];
-        for (int a = 0; a < 3; a++) {
-            o[a][i] = r->o[a];
-            rd[a][i] = r->rd[a];
-            ord[a][i] = r->o[a] * r->rd[a];
-            finite = finite && fabsf(ord[a][i]) <= FLT_MAX;
-            neg_lanes[a] += r->rd[a] < 0.0f;
-            omin[a] = r->o[a] < omin[a] ? r->o[a] : omin[a];
-            omax[a] = r->o[a] > omax[a] ? r->o[a] : omax[a];
-            rmin[a] = r->rd[a] < rmin[a] ? r->rd[a] : rmin[a];
-            rmax[a] = r->rd[a] > rmax[a] ? r->rd[a] : rmax[a];
-            rfinite[a] = rfinite[a] && fabsf(r->rd[a]) <= FLT_MAX;
-        }
-        tnear[i] = r->tnear;
-        p->f_tnear = r->tnear < p->f_tnear ? r->tnear : p->f_tnear;
-    }
-    bool one_octant = true;
+    /* the fields of lane i's ray are gathered from rays[i] (or the first
+     * live ray's) at index[i] + offset */
+    enum { RAY_FLOATS = sizeof(lanes_ray) / sizeof(float) };
+    const float *base = (const float *)(const void *)rays;
+    const int first = __builtin_ctz(live);
+    int32_t index[PACKET_RAYS];
+    for (int i = 0; i < PACKET_RAYS; i++) index[i] = (live & (1u << i) ? i : first) * RAY_FLOATS;
+    const vint idx = vi_loadu(index);
+    const vfloat flt_max = vf_set1(FLT_MAX), zero = vf_zero();
+    vmask finite = vm_true();
     for (int a = 0; a < 3; a++) {
-        p->o[a] = vf_loadu(o[a]);
-        p->rd[a] = vf_loadu(rd[a]);
-        p->ord[a] = vf_loadu(ord[a]);
-        one_octant = one_octant && (neg_lanes[a] == 0 || neg_lanes[a] == PACKET_RAYS);
-        p->near[a] = neg_lanes[a] ? a + 3 : a;
-        p->far[a] = neg_lanes[a] ? a : a + 3;
-        p->f_axis[a] = rfinite[a];
-        p->f_on[a] = vf_set1(neg_lanes[a] ? omin[a] : omax[a]);
-        p->f_of[a] = vf_set1(neg_lanes[a] ? omax[a] : omin[a]);
-        p->f_rmin[a] = vf_set1(rmin[a]);
-        p->f_rmax[a] = vf_set1(rmax[a]);
+        p->o[a] = vf_gather(base + offsetof(lanes_ray, o) / sizeof(float) + a, idx);
+        p->rd[a] = vf_gather(base + offsetof(lanes_ray, rd) / sizeof(float) + a, idx);
+        p->ord[a] = vf_mul(p->o[a], p->rd[a]);
+        finite = vm_and(finite, vf_le(vf_abs(p->ord[a]), flt_max));
+        const uint32_t neg = vm_bits(vf_lt(p->rd[a], zero));
+        p->near[a] = neg ? a + 3 : a;
+        p->far[a] = neg ? a : a + 3;
+        const float omin = vf_reduce_min(p->o[a]), omax = vf_reduce_max(p->o[a]);
+        p->f_axis[a] = vm_all(vf_le(vf_abs(p->rd[a]), flt_max));
+        p->f_on[a] = vf_set1(neg ? omin : omax);
+        p->f_of[a] = vf_set1(neg ? omax : omin);
+        p->f_rmin[a] = vf_set1(vf_reduce_min(p->rd[a]));
+        p->f_rmax[a] = vf_set1(vf_reduce_max(p->rd[a]));
     }
-    p->tnear = vf_loadu(tnear);
+    p->tnear = vf_gather(base + offsetof(lanes_ray, tnear) / sizeof(float), idx);
+    p->f_tnear = vf_reduce_min(p->tnear);
     p->exit_scale = vf_set1(exit_scale);
     if (exit_scale != 1.0f) {
         *slab = SLAB_ROBUST;
-        return one_octant;
+        return true;
     }
     *slab = accuracy == LANES_ACCURACY_FAST ? SLAB_FMA : SLAB_EXACT;
-    return one_octant && (finite || accuracy != LANES_ACCURACY_FAST);
+    return vm_all(finite) || accuracy != LANES_ACCURACY_FAST;
 }
 
 LANES_BODY vfloat packet_slab(int slab, vfloat plane, const packet_rays *p, int a)
@@ -191,7 +196,38 @@ typedef struct {
     uint8_t *occluded;   /* occlusion: per ray */
     float tfar[PACKET_RAYS];       /* each ray's best distance so far */
     uint32_t live;       /* rays not yet finished */
+    /* each ray's leaf test set-up, made when it first needs one: a ray
+     * meets several leaves and subtrees, and the set-up costs about as
+     * much as a block test */
+    uint32_t setup_ready;
+    wide_setup setup[PACKET_RAYS];
 } packet_state;
+
+LANES_BODY const wide_setup *ray_setup(packet_state *s, int i)
+{
+    if (!(s->setup_ready & (1u << i))) {
+        wide_setup_init(&s->setup[i], s->prec.algo, &s->rays[i], NULL);
+        s->setup_ready |= 1u << i;
+    }
+    return &s->setup[i];
+}
+
+/* The single-ray walks, kept out of line: inlined, they would be copied
+ * into every packet_walk instance (slab form x closest/any x counted),
+ * and the function grew past 100 KB of code. One copy per (any, counted):
+ * the branch on stats and any is decided here, as in trace_wide. */
+#define WALK_ALONE(name, ANY, STATS)                                                                  \
+    static __attribute__((noinline)) bool name(const lanes_wbvh *wb, lanes_tri_algo algo, int slab,   \
+                                               const node_ray *nr, const wide_setup *w, wide_entry e, \
+                                               float *tfar, lanes_hit *hit, lanes_trace_stats *stats) \
+    {                                                                                                 \
+        (void)stats;                                                                                  \
+        return wide_walk_from(wb, algo, slab, nr, w, e, tfar, ANY, hit, STATS);                       \
+    }
+WALK_ALONE(walk_closest, false, NULL)
+WALK_ALONE(walk_closest_counted, false, stats)
+WALK_ALONE(walk_any, true, NULL)
+WALK_ALONE(walk_any_counted, true, stats)
 
 /* Ray i continues alone from ref, entered at distance t. */
 LANES_BODY void finish_alone(packet_state *s, int i, uint32_t ref, float t, bool any,
@@ -200,13 +236,19 @@ LANES_BODY void finish_alone(packet_state *s, int i, uint32_t ref, float t, bool
     const lanes_ray *r = &s->rays[i];
     int slab;
     node_ray nr = node_ray_setup(r, s->accuracy, s->prec.exit_scale, &slab);
-    wide_setup w;
-    wide_setup_init(&w, s->prec.algo, r, NULL);
-    bool found = wide_walk_from(s->wb, s->prec.algo, slab, &nr, &w, (wide_entry){ref, t}, &s->tfar[i], any,
-                                any ? NULL : &s->hits[i], stats);
-    if (any && found) {
-        s->occluded[i] = 1;
-        s->live &= ~(1u << i);
+    const wide_setup *w = ray_setup(s, i);
+    const wide_entry e = {ref, t};
+    if (any) {
+        bool found = stats ? walk_any_counted(s->wb, s->prec.algo, slab, &nr, w, e, &s->tfar[i], NULL, stats)
+                           : walk_any(s->wb, s->prec.algo, slab, &nr, w, e, &s->tfar[i], NULL, NULL);
+        if (found) {
+            s->occluded[i] = 1;
+            s->live &= ~(1u << i);
+        }
+    } else if (stats) {
+        walk_closest_counted(s->wb, s->prec.algo, slab, &nr, w, e, &s->tfar[i], &s->hits[i], stats);
+    } else {
+        walk_closest(s->wb, s->prec.algo, slab, &nr, w, e, &s->tfar[i], &s->hits[i], NULL);
     }
 }
 
@@ -217,12 +259,11 @@ LANES_BODY void packet_leaf(packet_state *s, uint32_t ref, uint32_t act, bool an
     while (act) {
         int i = __builtin_ctz(act);
         act &= act - 1;
-        wide_setup w;
-        wide_setup_init(&w, s->prec.algo, &s->rays[i], NULL);
+        const wide_setup *w = ray_setup(s, i);
         if (stats) stats->leaves_visited++;
         if (!any) {
-            leaf_closest(s->prec.algo, &w, blk, lanes_wref_blocks(ref), &s->tfar[i], &s->hits[i], stats);
-        } else if (leaf_any(s->prec.algo, &w, blk, lanes_wref_blocks(ref), stats)) {
+            leaf_closest(s->prec.algo, w, blk, lanes_wref_blocks(ref), &s->tfar[i], &s->hits[i], stats);
+        } else if (leaf_any(s->prec.algo, w, blk, lanes_wref_blocks(ref), stats)) {
             s->occluded[i] = 1;
             s->live &= ~(1u << i);
         }
@@ -336,24 +377,27 @@ LANES_BODY void hybrid_group(const lanes_wbvh *wb, lanes_accuracy accuracy, cons
     s.rays = rays;
     s.hits = hits;
     s.occluded = occluded;
+    s.setup_ready = 0;
+    s.live = packet_live(rays, m);
+    packet_rays p;
+    int slab;
+    /* Rays of several octants go ray by ray: each ray's own nearest-first
+     * order beats a common one, and the frustum needs one octant. */
+    if (s.live == 0 || !one_octant(rays, s.live) || !packet_setup(rays, s.live, accuracy, s.prec.exit_scale, &p, &slab)) {
+        /* trace_wide's own entry, which also counts the rays: inlined
+         * here, the same loop ran 9% more instructions (callgrind) */
+        if (any)
+            LANES_FN(lanes_occluded_wide)(wb, accuracy, rays, m, occluded, stats);
+        else
+            LANES_FN(lanes_trace_wide)(wb, accuracy, rays, m, hits, stats);
+        return;
+    }
+    if (stats) stats->rays += m;
     for (size_t i = 0; i < m; i++) {
         if (any)
             occluded[i] = 0;
         else
             hits[i] = (lanes_hit){INFINITY, 0.0f, 0.0f, LANES_NO_HIT};
-    }
-    s.live = packet_live(rays, m);
-    if (s.live == 0) return;
-    packet_rays p;
-    int slab;
-    if (!packet_setup(rays, s.live, accuracy, s.prec.exit_scale, &p, &slab)) {
-        for (size_t i = 0; i < m; i++) {
-            if (any)
-                occluded[i] = wide_ray(wb, accuracy, &rays[i], true, NULL, stats);
-            else
-                wide_ray(wb, accuracy, &rays[i], false, &hits[i], stats);
-        }
-        return;
     }
     for (size_t i = 0; i < PACKET_RAYS; i++) s.tfar[i] = i < m ? rays[i].tfar : -INFINITY;
     if (slab == SLAB_FMA)
@@ -369,7 +413,6 @@ LANES_BODY void trace_hybrid_body(const lanes_wbvh *wb, lanes_accuracy accuracy,
 {
     for (size_t b = 0; b < n; b += PACKET_RAYS)
         hybrid_group(wb, accuracy, rays + b, n - b < PACKET_RAYS ? n - b : PACKET_RAYS, false, hits + b, NULL, stats);
-    if (stats) stats->rays += n;
 }
 
 LANES_BODY void occluded_hybrid_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays,
@@ -377,7 +420,6 @@ LANES_BODY void occluded_hybrid_body(const lanes_wbvh *wb, lanes_accuracy accura
 {
     for (size_t b = 0; b < n; b += PACKET_RAYS)
         hybrid_group(wb, accuracy, rays + b, n - b < PACKET_RAYS ? n - b : PACKET_RAYS, true, NULL, occluded + b, stats);
-    if (stats) stats->rays += n;
 }
 
 LANES_KERNELS_HYBRID(LANES_KERNEL_ENTRY)

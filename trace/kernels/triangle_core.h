@@ -247,7 +247,7 @@ LANES_BODY void wide_setup_init(wide_setup *w, lanes_tri_algo algo, const lanes_
         sx = s.sx, sy = s.sy, sz = s.sz;
         o[0] = ray->o[s.kx], o[1] = ray->o[s.ky], o[2] = ray->o[s.kz];
     }
-    memset(w->soa, 0, sizeof w->soa);
+    /* soa is read only by ray_vs_tris, which needs t; blocks read field */
     if (t) {
         const float *all[9] = {t->v0x, t->v0y, t->v0z, t->v1x, t->v1y, t->v1z, t->v2x, t->v2y, t->v2z};
         memcpy(w->soa, all, sizeof w->soa);
