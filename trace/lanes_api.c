@@ -34,9 +34,8 @@ struct lanes_device_impl {
 
 struct lanes_accel_impl {
     lanes_device device;
-    lanes_bvh2 bvh2;
     lanes_wbvh wide;
-    size_t triangles;
+    size_t triangles, skipped;
     float bounds_min[3], bounds_max[3];
 };
 
@@ -269,19 +268,16 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
     bo.threads = device->threads;
-    /* The wide BVH answers single rays and streams; the packet tracer
-     * still reads a BVH2 of its own. */
-    lanes_status status = lanes_bvh2_build(&scene, &bo, &a->bvh2, &err);
-    if (status == LANES_OK) lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
-    if (status == LANES_OK &&
-        (status = lanes_wbvh_build(&scene, device->k->wide_width, &bo, &a->wide, &err)) != LANES_OK)
-        lanes_bvh2_free(&a->bvh2);
+    /* The wide BVH answers every query: single rays, streams and packets. */
+    lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
+    lanes_status status = lanes_wbvh_build(&scene, device->k->wide_width, &bo, &a->wide, &err);
     free(scene.verts);
     if (status != LANES_OK) {
         free(a);
         return fail(device, status, "%s: %s", fn, err.message);
     }
     a->triangles = triangle_count;
+    a->skipped = triangle_count - finite;
     a->device = device;
     atomic_fetch_add(&device->refs, 1);
     *accel = a;
@@ -292,7 +288,6 @@ LANES_API lanes_status lanes_accel_release(lanes_accel accel)
 {
     if (!accel) return LANES_OK;
     lanes_wbvh_free(&accel->wide);
-    lanes_bvh2_free(&accel->bvh2);
     lanes_device d = accel->device;
     free(accel);
     device_unref(d);
@@ -307,13 +302,13 @@ LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info 
     info->isa = accel->device->k->name;
     info->accuracy = lanes_accuracy_name(accel->device->accuracy);
     info->triangles = accel->triangles;
-    info->skipped = accel->bvh2.skipped;
+    info->skipped = accel->skipped;
     info->nodes = accel->wide.node_count;
     info->node_width = accel->wide.width;
-    info->bytes = lanes_bvh2_bytes(&accel->bvh2) + lanes_wbvh_bytes(&accel->wide);
+    info->bytes = lanes_wbvh_bytes(&accel->wide);
     memcpy(info->bounds_min, accel->bounds_min, sizeof info->bounds_min);
     memcpy(info->bounds_max, accel->bounds_max, sizeof info->bounds_max);
-    info->build_seconds = accel->bvh2.build_seconds + accel->wide.build_seconds;
+    info->build_seconds = accel->wide.build_seconds;
     return LANES_OK;
 }
 
@@ -416,12 +411,14 @@ LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray,
     return query_result(accel, fn, &bad);
 }
 
+/* A multiple of every set's lane count, so that chunks cut no packet. */
 #define STREAM_CHUNK 64
 
-/* Rays one at a time through the wide BVH, in chunks (the traversal takes
- * an array): closest hits into hits, or, with occluded, any hits. */
+/* Rays through the wide BVH in chunks (the traversal takes an array):
+ * closest hits into hits, or, with occluded, any hits. One at a time, or,
+ * with packets, as hybrid packets of the set's lane count. */
 static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                               size_t n, lanes_hits_soa *hits, uint8_t *occluded)
+                               size_t n, lanes_hits_soa *hits, uint8_t *occluded, bool packets)
 {
     const lanes_device d = accel->device;
     const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
@@ -433,10 +430,10 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
         for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
         if (occluded) {
             memset(occluded + first, 0, m);
-            d->k->occluded_wide(&accel->wide, d->accuracy, chunk, m, occluded + first,
-                                NULL);
+            (packets ? d->k->occluded_hybrid : d->k->occluded_wide)(&accel->wide, d->accuracy, chunk, m,
+                                                                    occluded + first, NULL);
         } else {
-            d->k->trace_wide(&accel->wide, d->accuracy, chunk, m, found, NULL);
+            (packets ? d->k->trace_hybrid : d->k->trace_wide)(&accel->wide, d->accuracy, chunk, m, found, NULL);
             for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);
         }
     }
@@ -449,7 +446,7 @@ LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_ray
     static const char fn[] = "lanes_intersect_stream";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
                                   hits && hits->t && hits->prim_id);
-    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL, false);
 }
 
 LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
@@ -457,63 +454,7 @@ LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays
 {
     static const char fn[] = "lanes_occluded_stream";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
-    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded);
-}
-
-/* Packets: up to LANES_PACKET_MAX_RAYS consecutive rays at a time, copied
- * into the kernels' padded SoA arrays (which full-width loads need). */
-static lanes_status trace_packets(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
-                                  size_t n, lanes_hits_soa *hits, uint8_t *occluded)
-{
-    const lanes_device d = accel->device;
-    const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
-    size_t cap = n < LANES_PACKET_MAX_RAYS ? n : LANES_PACKET_MAX_RAYS;
-    if (cap == 0) return LANES_OK;
-    lanes_rays pk;
-    uint32_t *prim = malloc(cap * sizeof *prim);
-    float *u = malloc(cap * sizeof *u), *v = malloc(cap * sizeof *v);
-    uint8_t *occ = malloc(cap);
-    if (!lanes_rays_alloc(&pk, cap) || !prim || !u || !v || !occ) {
-        free(prim), free(u), free(v), free(occ);
-        lanes_rays_free(&pk);
-        return fail(d, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory for a packet of %zu rays", fn,
-                    cap);
-    }
-    invalid_rays bad = {0, 0};
-    for (size_t first = 0; first < n; first += cap) {
-        size_t m = n - first < cap ? n - first : cap;
-        for (size_t i = 0; i < m; i++) {
-            size_t j = first + i;
-            pk.ox[i] = rays->org_x[j], pk.oy[i] = rays->org_y[j], pk.oz[i] = rays->org_z[j];
-            pk.dx[i] = rays->dir_x[j], pk.dy[i] = rays->dir_y[j], pk.dz[i] = rays->dir_z[j];
-            pk.tnear[i] = rays->tnear[j], pk.tfar[i] = rays->tfar[j];
-            prim[i] = LANES_NO_HIT;
-            occ[i] = 0;
-            /* The stream's validity rule, so both report alike (rays_prepare
-             * below applies it too, without saying which ray). */
-            lanes_ray r = {{pk.ox[i], pk.oy[i], pk.oz[i]}, {pk.dx[i], pk.dy[i], pk.dz[i]},
-                           {0, 0, 0}, pk.tnear[i], pk.tfar[i]};
-            if (!lanes_ray_valid(&r) && bad.count++ == 0) bad.first = j;
-        }
-        pk.count = m;
-        d->k->rays_prepare(&pk, rcp);
-        lanes_frustum f;
-        d->k->frustum_build(&pk, NULL, m, &f);
-        lanes_packet_options po = {LANES_PACKET_PARTITION, d->accuracy, &f, true, false,
-                                   occluded != NULL};
-        d->k->trace_packet(&accel->bvh2, &po, &pk, prim, u, v, occ, NULL);
-        for (size_t i = 0; i < m; i++) {
-            if (occluded) {
-                occluded[first + i] = occ[i] ? 1 : 0;
-            } else {
-                lanes_hit h = {pk.tfar[i], u[i], v[i], prim[i]};
-                store_hit(hits, first + i, &h);
-            }
-        }
-    }
-    free(prim), free(u), free(v), free(occ);
-    lanes_rays_free(&pk);
-    return query_result(accel, fn, &bad);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded, false);
 }
 
 LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_rays_soa *rays,
@@ -522,7 +463,7 @@ LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_ray
     static const char fn[] = "lanes_intersect_packet";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
                                   hits && hits->t && hits->prim_id);
-    return st != LANES_OK ? st : trace_packets(accel, fn, rays, n, hits, NULL);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL, true);
 }
 
 LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays_soa *rays,
@@ -530,5 +471,5 @@ LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays
 {
     static const char fn[] = "lanes_occluded_packet";
     lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
-    return st != LANES_OK ? st : trace_packets(accel, fn, rays, n, NULL, occluded);
+    return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded, true);
 }

@@ -266,11 +266,17 @@ LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_ray
 LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
                                              size_t n, uint8_t *occluded);
 
-/* Coherent packets (Wu 2016): n rays, any n, traced together in packets of
- * up to 1024 consecutive rays with partition traversal and a frustum per
- * packet. Results are the same as the stream's (bitwise for closest hits
- * but for ties between triangles at equal t); faster where neighbouring
- * rays are alike (camera rays in screen tiles, shadows to one light). */
+/* Coherent packets: n rays, any n, traced through the wide BVH in packets
+ * of the set's lane count (4, 8 or 16 consecutive rays): a frustum test of
+ * each node's children for the whole packet, then the exact test per ray,
+ * until one ray is left, which goes on alone (hybrid traversal, Benthin et
+ * al. 2012). Consecutive rays pointing into different octants go one at a
+ * time. Faster where neighbouring rays are alike (camera rays in screen
+ * tiles, shadows to one light). Each ray gets the stream's answer, bitwise,
+ * except where the order of visiting decides: two triangles hit at the same
+ * t, or a hit that lies within rounding of its box's boundary, which one
+ * order finds and the other may not (both answers are then within the
+ * accuracy mode's rounding). */
 LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_rays_soa *rays,
                                               size_t n, lanes_hits_soa *hits);
 LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays_soa *rays,
