@@ -481,9 +481,8 @@ static void print_table(FILE *out, const compare *c)
     }
 }
 
-static void write_csv(const char *path, const compare *c)
+static void write_csv(FILE *f, const char *path, const compare *c)
 {
-    FILE *f = cli_create_file("compare: --csv", path);
     fprintf(f, "rays,engine,method,isa,threads,mrays,ratio\n");
     for (size_t i = 0; i < c->res.count; i++) {
         const row *w = &c->res.rows[i];
@@ -644,6 +643,9 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     }
     if (o->rays < 0) o->rays = o->quick ? 128 * 128 : 512 * 512;
     if (o->reps < 0) o->reps = o->quick ? 2 : 5;
+    /* Opened now: a path that cannot be written fails before the minutes
+     * of measuring, not after. */
+    FILE *csv = o->csv ? cli_create_file("compare: --csv", o->csv) : NULL;
 
     lanes_error err;
     memset(&err, 0, sizeof err);
@@ -798,7 +800,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
                    ag->rays - ag->agree, ag->rays, ag->differ.ties, ag->differ.grazing, ag->differ.other);
         }
     }
-    if (o->csv) write_csv(o->csv, c);
+    if (csv) write_csv(csv, o->csv, c);
     if (fflush(stdout) != 0) status = 1;
 
     free(primary);
