@@ -69,8 +69,10 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
         } else if (cli_value(&a, "--size", &value)) {
             int w = 0, h = 0;
             char tail;
-            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384)
-                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..16384, not '%s'", value);
+            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > LANES_CAMERA_MAX_SIDE ||
+                h > LANES_CAMERA_MAX_SIDE)
+                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..%d, not '%s'", LANES_CAMERA_MAX_SIDE,
+                                value);
             po.base.width = w;
             po.base.height = h;
         } else if (cli_flag(&a, "--no-frustum")) {

@@ -47,6 +47,10 @@ typedef struct lanes_camera {
     int width, height;  /* default image size; the CLI may override */
 } lanes_camera;
 
+/* The largest image side the renderers take: a scene file's camera and
+ * `lanes render --size` are checked against it when read. */
+#define LANES_CAMERA_MAX_SIDE 16384
+
 typedef struct lanes_scene {
     char name[128];
     /* Triangle i has vertices verts[9i .. 9i+8] (v0, v1, v2; xyz each) and

@@ -407,7 +407,7 @@ static bool parse_camera(ctx *c, const cJSON *cam)
     for (int i = 0; i < 2; i++) {
         if ((e = member(cam, dims[i]))) {
             push_key(c, dims[i]);
-            ok = get_int(c, e, 1, 65536, dst[i]);
+            ok = get_int(c, e, 1, LANES_CAMERA_MAX_SIDE, dst[i]);
             pop(c);
             if (!ok)
                 return false;

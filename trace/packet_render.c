@@ -610,13 +610,14 @@ lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_ac
     while ((side * 2) * (side * 2) <= opt->packet_size) side *= 2;
     job.width = opt->base.width > 0 ? opt->base.width : scene->camera.width;
     job.height = opt->base.height > 0 ? opt->base.height : scene->camera.height;
-    if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
+    if (job.width <= 0 || job.height <= 0 || job.width > LANES_CAMERA_MAX_SIDE || job.height > LANES_CAMERA_MAX_SIDE ||
         opt->base.spp < 1 || opt->base.spp > 65536 || opt->base.max_depth < 0 ||
         opt->base.max_depth > LANES_MAX_DEPTH) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "render: image size %dx%d, %d samples per pixel or depth %d out of range "
-                               "(1..16384, 1..65536, 0..%d)",
-                               job.width, job.height, opt->base.spp, opt->base.max_depth, LANES_MAX_DEPTH);
+                               "(1..%d, 1..65536, 0..%d)",
+                               job.width, job.height, opt->base.spp, opt->base.max_depth, LANES_CAMERA_MAX_SIDE,
+                               LANES_MAX_DEPTH);
     }
     if (accel->bvh2.node_count == 0) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: the scene has no triangles");

@@ -263,12 +263,13 @@ lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *ac
     }
     job.width = opt->width > 0 ? opt->width : scene->camera.width;
     job.height = opt->height > 0 ? opt->height : scene->camera.height;
-    if (job.width <= 0 || job.height <= 0 || job.width > 16384 || job.height > 16384 ||
+    if (job.width <= 0 || job.height <= 0 || job.width > LANES_CAMERA_MAX_SIDE || job.height > LANES_CAMERA_MAX_SIDE ||
         opt->spp < 1 || opt->spp > 65536 || opt->max_depth < 0 || opt->max_depth > LANES_MAX_DEPTH) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "render: image size %dx%d, %d samples per pixel or depth %d out of range "
-                               "(1..16384, 1..65536, 0..%d)",
-                               job.width, job.height, opt->spp, opt->max_depth, LANES_MAX_DEPTH);
+                               "(1..%d, 1..65536, 0..%d)",
+                               job.width, job.height, opt->spp, opt->max_depth, LANES_CAMERA_MAX_SIDE,
+                               LANES_MAX_DEPTH);
     }
     if (opt->accuracy < LANES_ACCURACY_FROM_SCENE || opt->accuracy >= LANES_ACCURACY_COUNT) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: accuracy mode %d unknown",
