@@ -137,6 +137,26 @@ static size_t locate(const char *t, size_t n, const path_elem *path, int depth)
     return i;
 }
 
+/* The offset of the first \u0000 escape inside a JSON string, or n.
+ * cJSON decodes it to a NUL byte, which silently ends the key or value it
+ * is in ("color\u0000x" would read as "color"). Escaped backslashes are
+ * skipped, so "\\u0000" (a backslash, then "u0000") is not one. */
+static size_t find_nul_escape(const char *t, size_t n)
+{
+    bool in_string = false;
+    for (size_t i = 0; i < n; i++) {
+        if (!in_string) {
+            in_string = t[i] == '"';
+        } else if (t[i] == '"') {
+            in_string = false;
+        } else if (t[i] == '\\' && i + 1 < n) {
+            if (t[i + 1] == 'u' && i + 5 < n && memcmp(t + i + 2, "0000", 4) == 0) return i;
+            i++; /* the escaped character */
+        }
+    }
+    return n;
+}
+
 static unsigned long line_of(const char *t, size_t n, size_t off)
 {
     unsigned long line = 1;
@@ -880,6 +900,13 @@ lanes_status lanes_scene_file_parse(const char *text, size_t len, const char *na
     size_t first = skip_ws(c.text, c.len, 0);
     if (first == c.len) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: empty file", name);
+    }
+    size_t nul = find_nul_escape(c.text, c.len);
+    if (nul < c.len) {
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "%s: line %lu: a string holds \\u0000, which would cut it short; names, "
+                               "keys and paths cannot contain NUL",
+                               name, line_of(c.text, c.len, nul));
     }
     const char *end = NULL;
     /* Trailing content is checked here rather than by cJSON's

@@ -947,6 +947,7 @@ static const bad_case bad_scenes[] = {
     {"scenes/bad/huge_number.json", {"line 2", "out of range"}},
     {"scenes/bad/camera_up_parallel.json", {"line 2", "parallel"}},
     {"scenes/bad/huge_camera.json", {"line 5", "camera.width", "16384"}},
+    {"scenes/bad/nul_key.json", {"line 2", "\\u0000", "NUL"}},
     {"scenes/bad/no_objects.json", {"line 3", "no objects"}},
     {"scenes/bad/not_object.json", {"line 1", "top level"}},
     {"scenes/bad/empty.json", {"empty file"}},
