@@ -148,11 +148,17 @@ if(lanes_cli_target)
   add_test(NAME cli.output_folders
     COMMAND bash -c "rm -rf \"$1\" && \"$0\" render -o \"$1/new/deeper/x.png\" --size 8x8 && test -s \"$1/new/deeper/x.png\""
             $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
+  # (The message is checked in the script: a PASS_REGULAR_EXPRESSION would
+  # make ctest ignore the exit status.)
   add_test(NAME cli.output_unwritable
-    COMMAND bash -c "\"$0\" render -o /proc/lanes-no-such-folder/x.png --size 8x8; test $? -eq 2"
+    COMMAND bash -c "out=$(\"$0\" render -o /proc/lanes-no-such-folder/x.png --size 8x8 2>&1); s=$?; echo \"$out\"; test $s -eq 2 && grep -q 'cannot create /proc/lanes-no-such-folder: No such file or directory' <<< \"$out\""
             $<TARGET_FILE:${lanes_cli_target}>)
-  set_tests_properties(cli.output_unwritable PROPERTIES
-    PASS_REGULAR_EXPRESSION "cannot create /proc/lanes-no-such-folder: No such file or directory")
+  # lanes compare opens its --csv file first: a bad path fails at once,
+  # before any measuring (no table printed).
+  add_test(NAME cli.compare_csv_unwritable
+    COMMAND bash -c "out=$(\"$0\" compare --quick --csv /proc/lanes-no-such-folder/x.csv 2>&1); s=$?; echo \"$out\"; test $s -eq 2 && grep -q 'compare: --csv: cannot create /proc/lanes-no-such-folder' <<< \"$out\" && ! grep -q Mrays <<< \"$out\""
+            $<TARGET_FILE:${lanes_cli_target}>)
+  set_tests_properties(cli.compare_csv_unwritable PROPERTIES TIMEOUT 60)
   # --packet: the range in the message is the rule that is applied.
   foreach(pair IN ITEMS "sse4|2|4" "avx2|8|16")
     string(REPLACE "|" ";" pair "${pair}")
