@@ -28,9 +28,9 @@
  * node; at or below it they continue as single rays. Embree switches at 3
  * of 4, 7 of 8 and 14 of 16 rays; for lanes that was the slowest choice.
  * Measured on dragon (AMD Zen 5; hybrid/wide, paired medians of 11 runs):
- * at 14 of 16, primary 0.93x and shadow 0.76x; at 8, 1.13x and 0.98x; at
- * 1, 1.43x and 1.27x; at 7 of 8, 1.16x and 0.92x; at 1 of 8, 1.26x and
- * 1.20x. A packet's node test is a frustum test plus one exact test per
+ * at 14 of 16 rays, primary 0.93x and shadow 0.76x; at 8 of 16, 1.13x and
+ * 0.98x; at 1 of 16, 1.43x and 1.27x; at 7 of 8, 1.16x and 0.92x; at 1 of
+ * 8, 1.26x and 1.20x. A packet's node test is a frustum test plus one exact test per
  * child it keeps (2-4 on these scenes), so it beats single rays' one test
  * per ray while more rays than that are live, and a ray that goes on alone
  * pays its own set-up at every node where it leaves a packet. */
@@ -383,7 +383,8 @@ LANES_BODY void hybrid_group(const lanes_wbvh *wb, lanes_accuracy accuracy, cons
     int slab;
     /* Rays of several octants go ray by ray: each ray's own nearest-first
      * order beats a common one, and the frustum needs one octant. */
-    if (s.live == 0 || !one_octant(rays, s.live) || !packet_setup(rays, s.live, accuracy, s.prec.exit_scale, &p, &slab)) {
+    if (s.live == 0 || !one_octant(rays, s.live) ||
+        !packet_setup(rays, s.live, accuracy, s.prec.exit_scale, &p, &slab)) {
         /* trace_wide's own entry, which also counts the rays: inlined
          * here, the same loop ran 9% more instructions (callgrind) */
         if (any)
