@@ -27,13 +27,14 @@
 /* A packet goes on together while more than SWITCH_AT of its rays need a
  * node; at or below it they continue as single rays. Embree switches at 3
  * of 4, 7 of 8 and 14 of 16 rays; for lanes that was the slowest choice.
- * Measured on dragon (AMD Zen 5; hybrid/wide, paired medians of 11 runs):
- * at 14 of 16 rays, primary 0.93x and shadow 0.76x; at 8 of 16, 1.13x and
- * 0.98x; at 1 of 16, 1.43x and 1.27x; at 7 of 8, 1.16x and 0.92x; at 1 of
- * 8, 1.26x and 1.20x. A packet's node test is a frustum test plus one exact test per
- * child it keeps (2-4 on these scenes), so it beats single rays' one test
- * per ray while more rays than that are live, and a ray that goes on alone
- * pays its own set-up at every node where it leaves a packet. */
+ * Measured on dragon (AMD EPYC Zen 4, family 0x19 model 0x11; hybrid/wide,
+ * paired medians of 11 runs): at 14 of 16 rays, primary 0.93x and shadow
+ * 0.76x; at 8 of 16, 1.13x and 0.98x; at 1 of 16, 1.43x and 1.27x; at 7 of
+ * 8, 1.16x and 0.92x; at 1 of 8, 1.26x and 1.20x. A packet's node test is
+ * a frustum test plus one exact test per child it keeps (2-4 on these
+ * scenes), so it beats single rays' one test per ray while more rays than
+ * that are live, and a ray that goes on alone pays its own set-up at every
+ * node where it leaves a packet. */
 #if PACKET_RAYS > 1
 #define SWITCH_AT 1
 #else
