@@ -300,6 +300,21 @@ typedef struct {
     double seconds[2][64]; /* per pool, per repetition */
 } config;
 
+/* A lanes configuration of job j, named name, with output arrays for n
+ * rays (occlusion flags padded by pad bytes). */
+static config *add_lanes_config(config *cf, lanes_job j, const char *name, size_t n, size_t pad)
+{
+    cf->lj = j;
+    if (j.occlusion)
+        cf->lj.occluded = malloc(n + pad);
+    else
+        cf->lj.hits = malloc(n * sizeof *cf->lj.hits);
+    if (!cf->lj.occluded && !cf->lj.hits) cli_fail("compare: out of memory");
+    snprintf(cf->name, sizeof cf->name, "%s", name);
+    snprintf(cf->isa, sizeof cf->isa, "%s", j.k->name);
+    return cf;
+}
+
 static void run_config(lanes_pool *p, config *cf, size_t n, double *seconds)
 {
     double s;
@@ -338,42 +353,28 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
 
     for (int ii = 0; ii < c->isa_count; ii++) {
         const lanes_kernels *k = lanes_kernels_for(c->isas[ii]);
+        const lanes_job base = {.k = k, .bvh2 = &c->bvh2, .wide = &c->wide[width_slot(k->wide_width)],
+                                .rays = mode_rays, .accuracy = c->opt.accuracy, .occlusion = occl};
         for (int sc = 0; sc < LANES_SCHEME_COUNT; sc++) {
-            config *cf = &cfg[ncfg++];
-            cf->lj = (lanes_job){.k = k, .scheme = (lanes_scheme)sc, .bvh2 = &c->bvh2,
-                                 .wide = &c->wide[width_slot(k->wide_width)], .rays = mode_rays,
-                                 .accuracy = c->opt.accuracy, .occlusion = occl};
-            if (occl)
-                cf->lj.occluded = malloc(nn);
-            else
-                cf->lj.hits = malloc(nn * sizeof *cf->lj.hits);
-            if (!cf->lj.occluded && !cf->lj.hits) cli_fail("compare: out of memory");
-            snprintf(cf->name, sizeof cf->name, "%s", lanes_scheme_name((lanes_scheme)sc));
-            snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
+            lanes_job j = base;
+            j.scheme = (lanes_scheme)sc;
+            add_lanes_config(&cfg[ncfg++], j, lanes_scheme_name((lanes_scheme)sc), nn, 0);
         }
         /* hybrid packets: LANES_W consecutive rays (a 2x2, 2x4 or 4x4
          * pixel block of a tile for camera rays) through the wide BVH */
-        config *hc = &cfg[ncfg++];
-        hc->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_WIDE, .bvh2 = &c->bvh2,
-                             .wide = &c->wide[width_slot(k->wide_width)], .rays = mode_rays,
-                             .accuracy = c->opt.accuracy, .occlusion = occl, .hybrid = true};
-        hc->lj.hits = occl ? NULL : malloc(nn * sizeof *hc->lj.hits);
-        hc->lj.occluded = occl ? malloc(nn) : NULL;
-        if (!hc->lj.hits && !hc->lj.occluded) cli_fail("compare: out of memory");
-        snprintf(hc->name, sizeof hc->name, "hybrid");
-        snprintf(hc->isa, sizeof hc->isa, "%s", k->name);
+        lanes_job hj = base;
+        hj.scheme = LANES_SCHEME_WIDE;
+        hj.hybrid = true;
+        add_lanes_config(&cfg[ncfg++], hj, "hybrid", nn, 0);
         /* packets of 1024 consecutive rays (camera rays come in 8x8 pixel
          * tiles, so a packet is a strip of 16 tiles), partition traversal
          * of the BVH2 with the packet frustum built inside the clock */
-        config *cf = &cfg[ncfg++];
-        cf->lj = (lanes_job){.k = k, .scheme = LANES_SCHEME_SINGLE, .bvh2 = &c->bvh2, .rays = mode_rays,
-                             .accuracy = c->opt.accuracy, .occlusion = occl};
-        cf->lj.packet = true;
-        cf->lj.hits = occl ? NULL : malloc(nn * sizeof *cf->lj.hits);
-        cf->lj.occluded = occl ? malloc(nn + LANES_MAX_W) : NULL;
-        if ((!cf->lj.hits && !cf->lj.occluded) || !packet_setup(&cf->lj, n)) cli_fail("compare: out of memory");
-        snprintf(cf->name, sizeof cf->name, "packet");
-        snprintf(cf->isa, sizeof cf->isa, "%s", k->name);
+        lanes_job pj = base;
+        pj.scheme = LANES_SCHEME_SINGLE;
+        pj.wide = NULL;
+        pj.packet = true;
+        config *cf = add_lanes_config(&cfg[ncfg++], pj, "packet", nn, LANES_MAX_W);
+        if (!packet_setup(&cf->lj, n)) cli_fail("compare: out of memory");
     }
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++) {
         if (!lanes_embree_supports(c->embree, (lanes_embree_method)m)) continue;

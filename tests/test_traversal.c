@@ -5,9 +5,9 @@
  *  brute  (small scenes, BVHs with leaves of at most 1, 4 and 12
  *         triangles): every triangle tested with the same set's own
  *         triangle kernel (the hybrid packets also against trace_wide, on
-         those rays and on camera rays in 4x4 pixel blocks, whose
-         packets stay together: the same t bit for bit, the same
-         answer to occlusion). The traversal must find exactly what the brute
+ *         those rays and on camera rays in 4x4 pixel blocks, whose
+ *         packets stay together: the same t bit for bit, the same
+ *         answer to occlusion). The traversal must find exactly what the brute
  *         force finds: the same t bit for bit, the same triangle unless
  *         another one is hit at exactly that t (a tie, which either may
  *         report), and occlusion iff a closest hit exists. Since both sides

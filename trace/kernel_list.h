@@ -121,7 +121,7 @@
 
 /* hybrid_kernels.c: n prepared rays as packets of LANES_W consecutive rays
  * through the same wide BVH as trace_wide, SIMD across a packet's rays at
- * each node until few of them are left, then one ray at a time (hybrid
+ * each node until one of them is left, which goes on alone (hybrid
  * traversal). Same hits as trace_wide, except where the visiting order
  * decides (ties between leaves, hits on a box's rounding boundary). */
 #define LANES_KERNELS_HYBRID(X)                                                            \

@@ -2,8 +2,8 @@
  * instruction set. LANES_W consecutive rays (one per lane) visit the tree
  * together: at a node each child's box is tested against all rays of the
  * packet at once (SIMD across the rays, the node fetched once for all of
- * them), and when few rays are left at a node, those go on one at a time
- * through the single-ray core (wide_core.h) from that node: hybrid
+ * them), and when SWITCH_AT rays (one) or fewer are left at a node, they
+ * go on alone through the single-ray core (wide_core.h) from there: hybrid
  * traversal (Benthin, Wald, Woop, Ernst and Mark 2012; Embree's
  * BVHNIntersectorKHybrid). Leaves are tested per ray with the single-ray
  * block test.
@@ -41,12 +41,11 @@
 #define SWITCH_AT PACKET_RAYS
 #endif
 
-/* The packet's rays in SoA, as node_ray holds one ray. They share the
- * direction's octant, so the near and far planes are the same for all, as
- * for a single ray. */
+/* The packet's rays, one per lane of a node_ray (which otherwise holds one
+ * ray broadcast): they share the direction's octant, so the near and far
+ * planes are the same for all, and slab_t computes each lane's own ray. */
 typedef struct {
-    vfloat o[3], rd[3], ord[3], tnear, exit_scale;
-    int near[3], far[3];
+    node_ray r;
     /* The packet's interval bounds, for the frustum test of a whole node:
      * per axis the origin bound that makes the near
      * (far) plane nearest (farthest), and the range of 1/d; an axis with an
@@ -103,23 +102,23 @@ LANES_BODY bool packet_setup(const lanes_ray *rays, uint32_t live, lanes_accurac
     const vfloat flt_max = vf_set1(FLT_MAX), zero = vf_zero();
     vmask finite = vm_true();
     for (int a = 0; a < 3; a++) {
-        p->o[a] = vf_gather(base + offsetof(lanes_ray, o) / sizeof(float) + a, idx);
-        p->rd[a] = vf_gather(base + offsetof(lanes_ray, rd) / sizeof(float) + a, idx);
-        p->ord[a] = vf_mul(p->o[a], p->rd[a]);
-        finite = vm_and(finite, vf_le(vf_abs(p->ord[a]), flt_max));
-        const uint32_t neg = vm_bits(vf_lt(p->rd[a], zero));
-        p->near[a] = neg ? a + 3 : a;
-        p->far[a] = neg ? a : a + 3;
-        const float omin = vf_reduce_min(p->o[a]), omax = vf_reduce_max(p->o[a]);
-        p->f_axis[a] = vm_all(vf_le(vf_abs(p->rd[a]), flt_max));
+        p->r.o[a] = vf_gather(base + offsetof(lanes_ray, o) / sizeof(float) + a, idx);
+        p->r.rd[a] = vf_gather(base + offsetof(lanes_ray, rd) / sizeof(float) + a, idx);
+        p->r.ord[a] = vf_mul(p->r.o[a], p->r.rd[a]);
+        finite = vm_and(finite, vf_le(vf_abs(p->r.ord[a]), flt_max));
+        const uint32_t neg = vm_bits(vf_lt(p->r.rd[a], zero));
+        p->r.near[a] = neg ? a + 3 : a;
+        p->r.far[a] = neg ? a : a + 3;
+        const float omin = vf_reduce_min(p->r.o[a]), omax = vf_reduce_max(p->r.o[a]);
+        p->f_axis[a] = vm_all(vf_le(vf_abs(p->r.rd[a]), flt_max));
         p->f_on[a] = vf_set1(neg ? omin : omax);
         p->f_of[a] = vf_set1(neg ? omax : omin);
-        p->f_rmin[a] = vf_set1(vf_reduce_min(p->rd[a]));
-        p->f_rmax[a] = vf_set1(vf_reduce_max(p->rd[a]));
+        p->f_rmin[a] = vf_set1(vf_reduce_min(p->r.rd[a]));
+        p->f_rmax[a] = vf_set1(vf_reduce_max(p->r.rd[a]));
     }
-    p->tnear = vf_gather(base + offsetof(lanes_ray, tnear) / sizeof(float), idx);
-    p->f_tnear = vf_reduce_min(p->tnear);
-    p->exit_scale = vf_set1(exit_scale);
+    p->r.tnear = vf_gather(base + offsetof(lanes_ray, tnear) / sizeof(float), idx);
+    p->f_tnear = vf_reduce_min(p->r.tnear);
+    p->r.exit_scale = vf_set1(exit_scale);
     if (exit_scale != 1.0f) {
         *slab = SLAB_ROBUST;
         return true;
@@ -128,23 +127,17 @@ LANES_BODY bool packet_setup(const lanes_ray *rays, uint32_t live, lanes_accurac
     return vm_all(finite) || accuracy != LANES_ACCURACY_FAST;
 }
 
-LANES_BODY vfloat packet_slab(int slab, vfloat plane, const packet_rays *p, int a)
-{
-    if (slab == SLAB_FMA) return vf_fmsub(plane, p->rd[a], p->ord[a]);
-    return vf_mul(vf_sub(plane, p->o[a]), p->rd[a]);
-}
-
 /* Child j of node against every ray: the rays that enter it before their
  * tfar, and their entry distances in *tin (node_hits' arithmetic per ray). */
 LANES_BODY vmask packet_child(const float *node, int j, const packet_rays *p, int slab, vfloat tfar,
                               vfloat *tin_out)
 {
-    vfloat tin = p->tnear, tout = tfar;
+    vfloat tin = p->r.tnear, tout = tfar;
     for (int a = 0; a < 3; a++) {
-        tin = vf_max(packet_slab(slab, vf_set1(node[p->near[a] * WIDE_WIDTH + j]), p, a), tin);
-        tout = vf_min(packet_slab(slab, vf_set1(node[p->far[a] * WIDE_WIDTH + j]), p, a), tout);
+        tin = vf_max(slab_t(slab, vf_set1(node[p->r.near[a] * WIDE_WIDTH + j]), &p->r, a), tin);
+        tout = vf_min(slab_t(slab, vf_set1(node[p->r.far[a] * WIDE_WIDTH + j]), &p->r, a), tout);
     }
-    if (slab == SLAB_ROBUST) tout = vf_mul(tout, p->exit_scale);
+    if (slab == SLAB_ROBUST) tout = vf_mul(tout, p->r.exit_scale);
     *tin_out = tin;
     return vf_le(tin, tout);
 }
@@ -167,14 +160,14 @@ LANES_BODY uint32_t frustum_children(const float *node, const packet_rays *p, in
         vfloat tin = vf_set1(p->f_tnear), tout = vf_set1(tfar);
         for (int a = 0; a < 3; a++) {
             if (!p->f_axis[a]) continue;
-            vfloat xn = vf_sub(vf_load(node + p->near[a] * WIDE_WIDTH + j), p->f_on[a]);
-            vfloat xf = vf_sub(vf_load(node + p->far[a] * WIDE_WIDTH + j), p->f_of[a]);
+            vfloat xn = vf_sub(vf_load(node + p->r.near[a] * WIDE_WIDTH + j), p->f_on[a]);
+            vfloat xf = vf_sub(vf_load(node + p->r.far[a] * WIDE_WIDTH + j), p->f_of[a]);
             tin = vf_max(vf_mul(xn, vf_select(vf_ge(xn, zero), p->f_rmin[a], p->f_rmax[a])), tin);
             tout = vf_min(vf_mul(xf, vf_select(vf_ge(xf, zero), p->f_rmax[a], p->f_rmin[a])), tout);
         }
         tin = vf_sub(tin, vf_mul(vf_abs(tin), slack));
         tout = vf_add(tout, vf_mul(vf_abs(tout), slack));
-        if (slab == SLAB_ROBUST) tout = vf_mul(tout, p->exit_scale);
+        if (slab == SLAB_ROBUST) tout = vf_mul(tout, p->r.exit_scale);
         vf_storeu(tentry + j, tin);
         bits |= vm_bits(vf_le(tin, tout)) << j;
     }
@@ -294,12 +287,12 @@ LANES_BODY void packet_walk(packet_state *s, const packet_rays *p, int slab, boo
     bool ftfar_stale = true;
     int sp = 0;
     packet_entry e = {0, s->live, 0.0f};
-    vfloat et = p->tnear;
+    vfloat et = p->r.tnear;
     for (;;) {
         vfloat tfar = vf_loadu(s->tfar);
         /* the rays that still need this entry: not finished, and it is not
          * beyond their best hit */
-        uint32_t act = e.rays & s->live & ~vm_bits(vf_gt(et, vf_mul(tfar, p->exit_scale)));
+        uint32_t act = e.rays & s->live & ~vm_bits(vf_gt(et, vf_mul(tfar, p->r.exit_scale)));
         if (act == 0) goto pop;
         if (__builtin_popcount(act) <= SWITCH_AT) {
             vf_storeu(tin_lanes, et);
