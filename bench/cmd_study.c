@@ -591,15 +591,16 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
     cli_finish_file("study", path, f);
 }
 
-/* gnuplot scripts read the CSV files; a missing gnuplot is reported, not hidden. */
+/* gnuplot scripts read the CSV files; a missing gnuplot is reported, not
+ * hidden, and a script that cannot be written is a write failure like any
+ * other output's. */
 static bool run_gnuplot(const char *dir, const char *script_name, const char *script)
 {
     char path[2400], cmd[5000];
     snprintf(path, sizeof path, "%s/%s", dir, script_name);
-    FILE *f = fopen(path, "w");
-    if (!f) return false;
+    FILE *f = cli_create_file("study", path);
     fputs(script, f);
-    fclose(f);
+    cli_finish_file("study", path, f);
     snprintf(cmd, sizeof cmd, "cd '%s' && gnuplot '%s' 2>gnuplot.log", dir, script_name);
     return system(cmd) == 0;
 }

@@ -5,7 +5,10 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -36,6 +39,13 @@ extern "C" lanes_status lanes_image_write(const char *path, int width, int heigh
     auto out = OIIO::ImageOutput::create(path);
     if (!out) {
         return fail(err, std::string(path) + ": cannot write this image format: " + OIIO::geterror());
+    }
+    // OpenImageIO's message for a file it cannot open leaves out the OS's
+    // reason; opening it first (it is written next anyway) gives that.
+    if (std::FILE *probe = std::fopen(path, "wb")) {
+        std::fclose(probe);
+    } else {
+        return fail(err, std::string(path) + ": cannot write: " + std::strerror(errno));
     }
     bool linear = holds_floats(out->format_name());
     OIIO::ImageSpec spec(width, height, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);

@@ -98,9 +98,22 @@ static pthread_once_t env_once = PTHREAD_ONCE_INIT;
 static lanes_status env_status = LANES_OK;
 static char env_message[384];
 
-static void set_message(char *message, size_t size, const char *text)
+/* The calling thread's last failure, for lanes_last_error_message: kept
+ * here, in the lowest layer, so that the process-wide set choice below and
+ * the device and accel API (trace/lanes_api.c) report through one place. */
+static _Thread_local char last_error[512];
+
+LANES_API const char *lanes_last_error_message(void) { return last_error; }
+
+void lanes_record_error(const char *text) { snprintf(last_error, sizeof last_error, "%s", text); }
+
+/* The caller's message buffer gets text; a failure is also the thread's
+ * last error. */
+static lanes_status report(lanes_status status, char *message, size_t size, const char *text)
 {
     if (message && size) snprintf(message, size, "%s", text);
+    if (status != LANES_OK) lanes_record_error(text);
+    return status;
 }
 
 /* The best-ranked automatic set the build has and the CPU runs, ranked at
@@ -122,22 +135,23 @@ lanes_isa lanes_isa_best(void) { return best_below((lanes_isa)atomic_load(&max_i
  * that lacks one (CPU, then OS, then the disable switch). */
 lanes_status lanes_isa_check(lanes_isa isa, char *why, size_t size)
 {
+    char text[240];
     if (!valid(isa)) {
-        snprintf(why, size, "unknown instruction set; valid names: %s", lanes_isa_all_names());
-        return LANES_ERR_UNKNOWN_ISA;
+        snprintf(text, sizeof text, "unknown instruction set; valid names: %s", lanes_isa_all_names());
+        return report(LANES_ERR_UNKNOWN_ISA, why, size, text);
     }
     if (!isa_compiled[isa]) {
-        snprintf(why, size, "instruction set '%s' was not compiled into this build (see LANES_ISAS)",
+        snprintf(text, sizeof text, "instruction set '%s' was not compiled into this build (see LANES_ISAS)",
                  rows[isa].name);
-        return LANES_ERR_NOT_COMPILED;
+        return report(LANES_ERR_NOT_COMPILED, why, size, text);
     }
     char reason[160];
     if (lanes_cpu_explain_missing(lanes_cpu(), rows[isa].needs, reason, sizeof reason)) {
-        snprintf(why, size, "instruction set '%s' cannot run on this CPU: %s", rows[isa].name,
+        snprintf(text, sizeof text, "instruction set '%s' cannot run on this CPU: %s", rows[isa].name,
                  reason);
-        return LANES_ERR_CPU_LACKS;
+        return report(LANES_ERR_CPU_LACKS, why, size, text);
     }
-    return LANES_OK;
+    return report(LANES_OK, why, size, "");
 }
 
 static void read_environment(void)
@@ -187,8 +201,7 @@ static void read_environment(void)
 lanes_status lanes_isa_init(char *message, size_t message_size)
 {
     pthread_once(&env_once, read_environment);
-    set_message(message, message_size, env_message);
-    return env_status;
+    return report(env_status, message, message_size, env_message);
 }
 
 lanes_isa lanes_isa_current(void)
@@ -203,23 +216,21 @@ lanes_status lanes_set_isa(lanes_isa isa, char *message, size_t message_size)
     pthread_once(&env_once, read_environment);
     if (isa == LANES_ISA_NONE) {
         atomic_store(&current_isa, (int)lanes_isa_best());
-        set_message(message, message_size, "");
-        return LANES_OK;
+        return report(LANES_OK, message, message_size, "");
     }
     lanes_status st = lanes_isa_check(isa, why, sizeof why);
-    set_message(message, message_size, st == LANES_OK ? "" : why);
     if (st == LANES_OK) atomic_store(&current_isa, (int)isa);
-    return st;
+    return report(st, message, message_size, st == LANES_OK ? "" : why);
 }
 
 lanes_status lanes_set_isa_by_name(const char *name, char *message, size_t message_size)
 {
     lanes_isa isa = lanes_isa_from_name(name);
     if (isa == LANES_ISA_NONE) {
-        if (message && message_size)
-            snprintf(message, message_size, "'%s' is not an instruction set; valid names: %s",
-                     name ? name : "(null)", lanes_isa_all_names());
-        return LANES_ERR_UNKNOWN_ISA;
+        char why[384];
+        snprintf(why, sizeof why, "'%s' is not an instruction set; valid names: %s",
+                 name ? name : "(null)", lanes_isa_all_names());
+        return report(LANES_ERR_UNKNOWN_ISA, message, message_size, why);
     }
     return lanes_set_isa(isa, message, message_size);
 }
@@ -228,11 +239,12 @@ lanes_status lanes_set_max_isa(lanes_isa cap, char *message, size_t message_size
 {
     pthread_once(&env_once, read_environment);
     if (!valid(cap)) {
-        set_message(message, message_size, "unknown instruction set");
-        return LANES_ERR_UNKNOWN_ISA;
+        char why[384];
+        snprintf(why, sizeof why, "lanes_set_max_isa: unknown instruction set %d; valid names: %s",
+                 (int)cap, lanes_isa_all_names());
+        return report(LANES_ERR_UNKNOWN_ISA, message, message_size, why);
     }
     atomic_store(&max_isa, (int)cap);
     atomic_store(&current_isa, (int)lanes_isa_best());
-    set_message(message, message_size, "");
-    return LANES_OK;
+    return report(LANES_OK, message, message_size, "");
 }

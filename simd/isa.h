@@ -73,6 +73,10 @@ const char *lanes_cpu_all_feature_names(void);
 bool lanes_cpu_explain_missing(const lanes_cpu_features *cpu, uint32_t needs, char *why,
                                size_t size);
 
+/* Makes text the calling thread's lanes_last_error_message(): every failing
+ * public call, here and in trace/lanes_api.c, reports through it. */
+void lanes_record_error(const char *text);
+
 /* The CPU features a set needs, as LANES_CPU_* bits. */
 uint32_t lanes_isa_required_features(lanes_isa isa);
 

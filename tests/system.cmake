@@ -153,6 +153,11 @@ if(lanes_cli_target)
   add_test(NAME cli.output_unwritable
     COMMAND bash -c "out=$(\"$0\" render -o /proc/lanes-no-such-folder/x.png --size 8x8 2>&1); s=$?; echo \"$out\"; test $s -eq 2 && grep -q 'cannot create /proc/lanes-no-such-folder: No such file or directory' <<< \"$out\""
             $<TARGET_FILE:${lanes_cli_target}>)
+  # A folder that exists but a file that cannot be made there: the OS's
+  # reason, not only the image library's.
+  add_test(NAME cli.image_unwritable
+    COMMAND bash -c "out=$(\"$0\" render -o /proc/lanes-no-such-file.png --size 8x8 2>&1); s=$?; echo \"$out\"; test $s -eq 2 && grep -q '/proc/lanes-no-such-file.png: cannot write: No such file or directory' <<< \"$out\""
+            $<TARGET_FILE:${lanes_cli_target}>)
   # lanes compare opens its --csv file first: a bad path fails at once,
   # before any measuring (no table printed).
   add_test(NAME cli.compare_csv_unwritable
@@ -176,7 +181,7 @@ if(lanes_cli_target)
       break()
     endif()
   endforeach()
-  set_tests_properties(cli.output_folders cli.output_unwritable ${lanes_output_tests} PROPERTIES
+  set_tests_properties(cli.output_folders cli.output_unwritable cli.image_unwritable ${lanes_output_tests} PROPERTIES
     LABELS cli TIMEOUT 120 ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 
   # The main job's benchmark runs and reports every set this CPU runs.

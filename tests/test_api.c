@@ -260,6 +260,12 @@ static void test_devices(const char *expect_refused)
 
 static void test_argument_errors(const mesh *m)
 {
+    /* the process-wide set choice reports through the last error too */
+    char buf[256];
+    expect_error(lanes_set_isa_by_name("avx513", buf, sizeof buf), LANES_ERR_UNKNOWN_ISA, "avx513", "set_isa_by_name");
+    CHECK(strcmp(buf, lanes_last_error_message()) == 0, "set_isa_by_name: buffer \"%s\"", buf);
+    expect_error(lanes_set_isa((lanes_isa)99, NULL, 0), LANES_ERR_UNKNOWN_ISA, "unknown", "set_isa(99)");
+    expect_error(lanes_set_max_isa((lanes_isa)99, NULL, 0), LANES_ERR_UNKNOWN_ISA, "valid names", "set_max_isa(99)");
     lanes_device d;
     lanes_device_create(NULL, &d);
     lanes_device_set_error_callback(d, on_error, NULL);
@@ -338,6 +344,8 @@ static void test_argument_errors(const mesh *m)
     CHECK(lanes_intersect_stream(a, &rs, 1, &hs) == LANES_OK, "u, v may be NULL");
     CHECK(lanes_intersect_stream(a, &rs, 0, &hs) == LANES_OK && lanes_intersect_packet(a, &rs, 0, &hs) == LANES_OK,
           "n = 0");
+    CHECK(lanes_intersect_stream(a, NULL, 0, NULL) == LANES_OK && lanes_occluded_packet(a, NULL, 0, NULL) == LANES_OK,
+          "n = 0 needs no arrays: %s", lanes_last_error_message());
     free_rays(&one);
     free_results(&r);
 

@@ -1,5 +1,7 @@
-/* The same image from two kernel sets: the default scene rendered with the
- * scalar set and with the best one this CPU runs (wide scheme both), written
+/* The same image from two kernel sets: a scene (the default one unless
+ * --scene names another) rendered in one accuracy mode (--accuracy, default
+ * unless told) with the scalar set and with the best one this CPU runs (wide
+ * scheme both), written
  * as PNG through OpenImageIO and compared with its compare (idiff's engine).
  *
  * Two sets may legitimately differ in two ways only:
@@ -15,7 +17,7 @@
  * sets that compute the same arithmetic on the same BVH width (scalar and
  * sse4: no FMA, 4-wide nodes) must give the same image bit for bit.
  *
- *   test_render_isa OUTDIR [--size N] [ISA_A ISA_B]
+ *   test_render_isa OUTDIR [--size N] [--scene SPEC] [--accuracy MODE] [ISA_A ISA_B]
  */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -36,14 +38,16 @@
 #define MAX_FRACTION_OVER 1e-3
 #define MAX_MEAN_ERROR 1e-3
 
-/* The options both renders use: the wide scheme, default mode, size x size. */
+static lanes_accuracy accuracy = LANES_ACCURACY_DEFAULT;
+
+/* The options both renders use: the wide scheme, the mode asked for, size x size. */
 static lanes_render_options wide_options(lanes_isa isa, int size)
 {
     lanes_render_options opt;
     lanes_render_default_options(&opt);
     opt.isa = isa;
     opt.scheme = LANES_SCHEME_WIDE;
-    opt.accuracy = LANES_ACCURACY_DEFAULT;
+    opt.accuracy = accuracy;
     opt.width = opt.height = size;
     return opt;
 }
@@ -79,17 +83,32 @@ int main(int argc, char **argv)
 {
     setvbuf(stdout, NULL, _IOLBF, 0);
     if (argc < 2) {
-        printf("usage: test_render_isa OUTDIR [--size N] [ISA_A ISA_B]\n");
+        printf("usage: test_render_isa OUTDIR [--size N] [--scene SPEC] [--accuracy MODE] [ISA_A ISA_B]\n");
         return 2;
     }
     const char *dir = argv[1];
     int size = 256;
     lanes_isa a = LANES_ISA_SCALAR, b = lanes_isa_best();
     int i = 2;
-    if (i + 1 < argc && strcmp(argv[i], "--size") == 0) size = atoi(argv[i + 1]), i += 2;
+    const char *spec = "default";
+    bool bad_mode = false;
+    for (;;) {
+        if (i + 1 < argc && strcmp(argv[i], "--size") == 0) {
+            size = atoi(argv[i + 1]), i += 2;
+        } else if (i + 1 < argc && strcmp(argv[i], "--scene") == 0) {
+            spec = argv[i + 1], i += 2;
+        } else if (i + 1 < argc && strcmp(argv[i], "--accuracy") == 0) {
+            int mode = lanes_accuracy_from_name(argv[i + 1]);
+            bad_mode = mode < 0;
+            accuracy = bad_mode ? accuracy : (lanes_accuracy)mode;
+            i += 2;
+        } else {
+            break;
+        }
+    }
     bool explicit_pair = i + 1 < argc;
     if (explicit_pair) a = lanes_isa_from_name(argv[i]), b = lanes_isa_from_name(argv[i + 1]);
-    if (size < 8 || size > 4096 || a == LANES_ISA_NONE || b == LANES_ISA_NONE) {
+    if (size < 8 || size > 4096 || bad_mode || a == LANES_ISA_NONE || b == LANES_ISA_NONE) {
         printf("bad arguments\n");
         return 2;
     }
@@ -103,13 +122,14 @@ int main(int argc, char **argv)
     lanes_error err;
     memset(&err, 0, sizeof err);
     lanes_scene_init(&scene);
-    if (lanes_scene_load("default", &scene, &err) != LANES_OK) {
-        printf("FAIL: default scene: %s\n", err.message);
+    if (lanes_scene_load(spec, &scene, &err) != LANES_OK) {
+        printf("FAIL: scene %s: %s\n", spec, err.message);
         return 1;
     }
     char pa[1024], pb[1024];
-    snprintf(pa, sizeof pa, "%s/render_%s.png", dir, lanes_isa_name(a));
-    snprintf(pb, sizeof pb, "%s/render_%s.png", dir, lanes_isa_name(b));
+    /* the mode in the name: tests of two modes may run at once */
+    snprintf(pa, sizeof pa, "%s/render_%s_%s.png", dir, lanes_accuracy_name(accuracy), lanes_isa_name(a));
+    snprintf(pb, sizeof pb, "%s/render_%s_%s.png", dir, lanes_accuracy_name(accuracy), lanes_isa_name(b));
     lanes_render_result ra, rb;
     if (!render_with(&scene, a, size, pa, &ra) || !render_with(&scene, b, size, pb, &rb)) return 1;
     int status = 0;
@@ -147,7 +167,7 @@ int main(int argc, char **argv)
     if (!explicit_pair && lanes_isa_supported(LANES_ISA_SSE4) && b != LANES_ISA_SSE4) {
         char pc[1024];
         lanes_render_result rc;
-        snprintf(pc, sizeof pc, "%s/render_sse4.png", dir);
+        snprintf(pc, sizeof pc, "%s/render_%s_sse4.png", dir, lanes_accuracy_name(accuracy));
         if (!render_with(&scene, LANES_ISA_SSE4, size, pc, &rc)) return 1;
         bool same = rc.rays == ra.rays &&
                     memcmp(rc.rgb, ra.rgb, n * 3 * sizeof(float)) == 0;
@@ -162,7 +182,7 @@ int main(int argc, char **argv)
         lanes_device dev;
         lanes_accel api = NULL;
         char config[64];
-        snprintf(config, sizeof config, "isa=%s,accuracy=default", lanes_isa_name(b));
+        snprintf(config, sizeof config, "isa=%s,accuracy=%s", lanes_isa_name(b), lanes_accuracy_name(accuracy));
         lanes_status st = lanes_device_create(config, &dev);
         if (st == LANES_OK) st = lanes_render_api_accel_create(&scene, dev, &api);
         lanes_render_options opt = wide_options(b, size);

@@ -39,8 +39,6 @@ struct lanes_accel_impl {
     float bounds_min[3], bounds_max[3];
 };
 
-static _Thread_local char last_error[512];
-
 LANES_API const char *lanes_version(void)
 {
     return LANES_VERSION_TEXT(LANES_VERSION_MAJOR, LANES_VERSION_MINOR, LANES_VERSION_PATCH);
@@ -59,8 +57,6 @@ LANES_API const char *lanes_status_name(lanes_status status)
     return "unknown status";
 }
 
-LANES_API const char *lanes_last_error_message(void) { return last_error; }
-
 /* Records the failure for this thread and tells the device's callback. */
 static lanes_status fail(lanes_device device, lanes_status status, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -69,11 +65,13 @@ static lanes_status fail(lanes_device device, lanes_status status, const char *f
     ;
 static lanes_status fail(lanes_device device, lanes_status status, const char *fmt, ...)
 {
+    char text[512];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(last_error, sizeof last_error, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    if (device && device->callback) device->callback(device->callback_user, status, last_error);
+    lanes_record_error(text);
+    if (device && device->callback) device->callback(device->callback_user, status, text);
     return status;
 }
 
@@ -357,11 +355,13 @@ static bool soa_complete(const lanes_rays_soa *r)
            r->tfar;
 }
 
-/* The checks every query makes; LANES_OK when it may go on. */
-static lanes_status check_query(lanes_accel accel, const char *fn, const void *rays,
+/* The checks every query of n rays makes; LANES_OK when it may go on.
+ * Zero rays need no arrays. */
+static lanes_status check_query(lanes_accel accel, const char *fn, size_t n, const void *rays,
                                 bool rays_complete, const void *out, bool out_complete)
 {
     if (!accel) return fail(NULL, LANES_ERR_BAD_INPUT, "%s: accel is NULL", fn);
+    if (n == 0) return LANES_OK;
     if (!rays || !rays_complete)
         return fail(accel->device, LANES_ERR_BAD_INPUT, "%s: the ray%s NULL", fn,
                     rays ? "s have an array that is" : " is");
@@ -383,7 +383,7 @@ static lanes_rays_soa single_as_soa(const lanes_ray1 *r)
 LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray, lanes_hit1 *hit)
 {
     static const char fn[] = "lanes_intersect1";
-    lanes_status st = check_query(accel, fn, ray, true, hit, true);
+    lanes_status st = check_query(accel, fn, 1, ray, true, hit, true);
     if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
@@ -399,7 +399,7 @@ LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray
 LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray, bool *occluded)
 {
     static const char fn[] = "lanes_occluded1";
-    lanes_status st = check_query(accel, fn, ray, true, occluded, true);
+    lanes_status st = check_query(accel, fn, 1, ray, true, occluded, true);
     if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
@@ -444,7 +444,7 @@ LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_ray
                                               size_t n, lanes_hits_soa *hits)
 {
     static const char fn[] = "lanes_intersect_stream";
-    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
+    lanes_status st = check_query(accel, fn, n, rays, rays && soa_complete(rays), hits,
                                   hits && hits->t && hits->prim_id);
     return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL, false);
 }
@@ -453,7 +453,7 @@ LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays
                                              size_t n, uint8_t *occluded)
 {
     static const char fn[] = "lanes_occluded_stream";
-    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
+    lanes_status st = check_query(accel, fn, n, rays, rays && soa_complete(rays), occluded, true);
     return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded, false);
 }
 
@@ -461,7 +461,7 @@ LANES_API lanes_status lanes_intersect_packet(lanes_accel accel, const lanes_ray
                                               size_t n, lanes_hits_soa *hits)
 {
     static const char fn[] = "lanes_intersect_packet";
-    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), hits,
+    lanes_status st = check_query(accel, fn, n, rays, rays && soa_complete(rays), hits,
                                   hits && hits->t && hits->prim_id);
     return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, hits, NULL, true);
 }
@@ -470,6 +470,6 @@ LANES_API lanes_status lanes_occluded_packet(lanes_accel accel, const lanes_rays
                                              size_t n, uint8_t *occluded)
 {
     static const char fn[] = "lanes_occluded_packet";
-    lanes_status st = check_query(accel, fn, rays, rays && soa_complete(rays), occluded, true);
+    lanes_status st = check_query(accel, fn, n, rays, rays && soa_complete(rays), occluded, true);
     return st != LANES_OK ? st : trace_rays(accel, fn, rays, n, NULL, occluded, true);
 }

@@ -257,17 +257,17 @@ typedef struct lanes_hits_soa {
     uint32_t *prim_id;
 } lanes_hits_soa;
 
-/* A stream: n independent rays, any n (0 is allowed), traced one at a time
- * through the wide BVH. For incoherent rays (diffuse bounces, shadows to
- * many lights). */
+/* A stream: n independent rays, any n (0 is allowed, and then the arrays
+ * may be NULL), traced one at a time through the wide BVH. For incoherent
+ * rays (diffuse bounces, shadows to many lights). */
 LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,
                                               size_t n, lanes_hits_soa *hits);
 /* occluded[i] is 1 or 0. */
 LANES_API lanes_status lanes_occluded_stream(lanes_accel accel, const lanes_rays_soa *rays,
                                              size_t n, uint8_t *occluded);
 
-/* Coherent packets: n rays, any n, traced through the wide BVH in packets
- * of the set's lane count (4, 8 or 16 consecutive rays): a frustum test of
+/* Coherent packets: n rays, any n (0 as for streams), traced through the
+ * wide BVH in packets of the set's lane count (4, 8 or 16 consecutive rays): a frustum test of
  * each node's children for the whole packet, then the exact test per ray,
  * until one ray is left, which goes on alone (hybrid traversal, Benthin et
  * al. 2012). Consecutive rays pointing into different octants go one at a
