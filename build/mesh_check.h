@@ -93,6 +93,28 @@ static inline bool tok_is(mesh_tok t, const char *w)
     return t.n == strlen(w) && memcmp(t.p, w, t.n) == 0;
 }
 
+/* tok_is ignoring ASCII case, for formats whose keywords are written in
+ * either (ASCII STL: "SOLID", "FACET NORMAL" from some CAD exporters). */
+static inline bool tok_is_nocase(mesh_tok t, const char *w)
+{
+    if (t.n != strlen(w)) return false;
+    for (size_t i = 0; i < t.n; i++) {
+        unsigned char c = (unsigned char)t.p[i];
+        if ((c >= 'A' && c <= 'Z' ? c + ('a' - 'A') : c) != (unsigned char)w[i]) return false;
+    }
+    return true;
+}
+
+/* Whether head[0 .. n) starts with "solid" in any case, after white
+ * space: an ASCII STL (unless its size says binary). */
+static inline bool mesh_starts_solid(const unsigned char *head, size_t n)
+{
+    size_t i = 0;
+    while (i < n && (head[i] == ' ' || (head[i] >= '\t' && head[i] <= '\r'))) i++;
+    mesh_tok t = {(const char *)head + i, n - i < 5 ? n - i : 5};
+    return tok_is_nocase(t, "solid");
+}
+
 /* Printable form of a token for messages, cut short. */
 const char *mesh_tok_str(mesh_tok t, char out[48]);
 

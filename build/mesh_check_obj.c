@@ -4,6 +4,8 @@
 
 #include "build/mesh_check.h"
 
+#include <stdlib.h>
+
 /* The numbers after a v, vt or vn keyword: finite decimal reals, as many
  * as Assimp 5.2 reads. It drops a vertex of 5 numbers (or 7, or 2)
  * without a word, so the faces after it point at the wrong vertices, and
@@ -80,12 +82,58 @@ static bool obj_range(mesh_stream *s, const obj_ref *ref)
                           ref->count);
 }
 
-bool mesh_check_obj(mesh_stream *s)
+/* The next line as Assimp's OBJ reader sees it: a backslash that ends a
+ * line is dropped with the line break, and the next line follows with no
+ * blank between ("v 1 \\" then "2 3" is "v 1 2 3"), before comments are
+ * cut. Messages name the last of the joined lines. 1: a line is in s->ln;
+ * 0: end of file; -1: error (message set). */
+static int obj_get_line(mesh_stream *s, char **held, size_t *held_cap)
+{
+    int r = mesh_get_line(s);
+    while (r > 0 && s->ln_len > 0 && s->ln[s->ln_len - 1] == '\\') {
+        size_t keep = s->ln_len - 1;
+        if (keep + 1 > *held_cap) {
+            char *p = realloc(*held, keep + 1);
+            if (!p) {
+                lanes_error_set(s->err, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory reading a line", s->path);
+                return -1;
+            }
+            *held = p;
+            *held_cap = keep + 1;
+        }
+        memcpy(*held, s->ln, keep);
+        r = mesh_get_line(s);
+        if (r == 0) {
+            mesh_fail_line(s, "the last line ends in a line continuation '\\'");
+            return -1;
+        }
+        if (r < 0) return r;
+        if (keep + s->ln_len + 1 > MAX_LINE) {
+            mesh_fail_line(s, "line longer than %u bytes", MAX_LINE);
+            return -1;
+        }
+        if (keep + s->ln_len + 1 > s->ln_cap) {
+            char *p = realloc(s->ln, keep + s->ln_len + 1);
+            if (!p) {
+                lanes_error_set(s->err, LANES_ERR_OUT_OF_MEMORY, "%s: out of memory reading a line", s->path);
+                return -1;
+            }
+            s->ln = p;
+            s->ln_cap = keep + s->ln_len + 1;
+        }
+        memmove(s->ln + keep, s->ln, s->ln_len + 1);
+        memcpy(s->ln, *held, keep);
+        s->ln_len += keep;
+    }
+    return r;
+}
+
+static bool check_obj(mesh_stream *s, char **held, size_t *held_cap)
 {
     obj_ref v = {0, 0, 0, "vertex"}, vt = {0, 0, 0, "texture coordinate"},
             vn = {0, 0, 0, "normal"};
     int r;
-    while ((r = mesh_get_line(s)) > 0) {
+    while ((r = obj_get_line(s, held, held_cap)) > 0) {
         char *hash = strchr(s->ln, '#');
         if (hash)
             *hash = '\0';
@@ -163,4 +211,13 @@ bool mesh_check_obj(mesh_stream *s)
         return false;
     }
     return true;
+}
+
+bool mesh_check_obj(mesh_stream *s)
+{
+    char *held = NULL;
+    size_t held_cap = 0;
+    bool ok = check_obj(s, &held, &held_cap);
+    free(held);
+    return ok;
 }

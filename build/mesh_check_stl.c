@@ -54,16 +54,16 @@ static bool check_stl_ascii(mesh_stream *s)
         char b[48];
         if (!next_tok(&cur, &kw))
             continue;
-        if (tok_is(kw, "solid") || tok_is(kw, "endsolid")) {
+        if (tok_is_nocase(kw, "solid") || tok_is_nocase(kw, "endsolid")) {
             if (in_facet)
                 return mesh_fail_line(s, "'%s' inside a facet", mesh_tok_str(kw, b));
-        } else if (tok_is(kw, "facet")) {
+        } else if (tok_is_nocase(kw, "facet")) {
             if (in_facet)
                 return mesh_fail_line(s, "'facet' before the previous one ended");
             /* Assimp rejects a malformed normal (and leaks the mesh it was
              * building), so it is checked here first. */
             mesh_tok t;
-            if (!next_tok(&cur, &t) || !tok_is(t, "normal"))
+            if (!next_tok(&cur, &t) || !tok_is_nocase(t, "normal"))
                 return mesh_fail_line(s, "expected 'facet normal nx ny nz'");
             for (int k = 0; k < 3; k++) {
                 double v;
@@ -75,22 +75,22 @@ static bool check_stl_ascii(mesh_stream *s)
             in_facet = true;
             had_loop = false;
             nvert = 0;
-        } else if (tok_is(kw, "outer")) {
+        } else if (tok_is_nocase(kw, "outer")) {
             mesh_tok t;
-            if (!next_tok(&cur, &t) || !tok_is(t, "loop"))
+            if (!next_tok(&cur, &t) || !tok_is_nocase(t, "loop"))
                 return mesh_fail_line(s, "expected 'outer loop'");
             if (!stl_line_ends(s, cur, "outer loop"))
                 return false;
             if (!in_facet || in_loop || had_loop)
                 return mesh_fail_line(s, "'outer loop' outside a facet, or a second one in it");
             in_loop = true;
-        } else if (tok_is(kw, "vertex")) {
+        } else if (tok_is_nocase(kw, "vertex")) {
             if (!in_loop)
                 return mesh_fail_line(s, "'vertex' outside a loop");
             if (!mesh_read_xyz(s, &cur, "vertex") || !stl_line_ends(s, cur, "vertex x y z"))
                 return false;
             nvert++;
-        } else if (tok_is(kw, "endloop")) {
+        } else if (tok_is_nocase(kw, "endloop")) {
             if (!stl_line_ends(s, cur, "endloop"))
                 return false;
             if (!in_loop)
@@ -100,7 +100,7 @@ static bool check_stl_ascii(mesh_stream *s)
                                       (unsigned long long)nvert);
             in_loop = false;
             had_loop = true;
-        } else if (tok_is(kw, "endfacet")) {
+        } else if (tok_is_nocase(kw, "endfacet")) {
             if (!stl_line_ends(s, cur, "endfacet"))
                 return false;
             if (!in_facet || !had_loop)
@@ -157,10 +157,7 @@ bool mesh_check_stl(mesh_stream *s, long long size)
             return check_stl_binary(s, count);
         }
     }
-    size_t i = 0;
-    while (i < got && isspace(head[i]))
-        i++;
-    if (got - i >= 5 && memcmp(head + i, "solid", 5) == 0) {
+    if (mesh_starts_solid(head, got)) {
         rewind(s->f);
         s->pos = s->len = 0;
         s->base = 0;

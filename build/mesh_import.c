@@ -15,6 +15,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <ctype.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -30,14 +31,47 @@
  * directories included: "mtllib /" made it open the OBJ's directory, fail
  * to read it and leak the stream (found by fuzz_mesh_obj), and a FIFO would
  * block it. Read-only: Assimp never needs to write here. */
+typedef struct {
+    FILE *f;
+    /* An ASCII STL whose keywords are not all lower case ("SOLID",
+     * "FACET NORMAL"): Assimp's STL reader matches them case-sensitively and
+     * takes such a file for binary, so it reads the file lower-cased (the
+     * numbers read the same; only the solid's name changes). */
+    bool lower;
+} io_state;
+
 static FILE *io_file(struct aiFile *a)
 {
-    return (FILE *)(void *)a->UserData;
+    return ((io_state *)(void *)a->UserData)->f;
 }
 
 static size_t io_read(struct aiFile *a, char *buf, size_t size, size_t count)
 {
-    return size && count ? fread(buf, size, count, io_file(a)) : 0;
+    if (!size || !count) return 0;
+    size_t got = fread(buf, size, count, io_file(a));
+    if (((io_state *)(void *)a->UserData)->lower)
+        for (size_t i = 0; i < got * size; i++)
+            if (buf[i] >= 'A' && buf[i] <= 'Z') buf[i] = (char)(buf[i] + ('a' - 'A'));
+    return got;
+}
+
+/* An ASCII STL (by extension, by a first word "solid" in any case, and by a
+ * size that is not a binary STL's) whose first word is not "solid". */
+static bool stl_needs_lowering(const char *path, FILE *f, long long size)
+{
+    if (!mesh_ext_is(path, "stl")) return false;
+    unsigned char head[84];
+    size_t n = fread(head, 1, sizeof head, f);
+    rewind(f);
+    if (!mesh_starts_solid(head, n)) return false;
+    if (n == sizeof head) {
+        unsigned long long count = (unsigned long long)head[80] | (unsigned long long)head[81] << 8 |
+                                   (unsigned long long)head[82] << 16 | (unsigned long long)head[83] << 24;
+        if ((unsigned long long)size == 84ull + 50ull * count) return false;
+    }
+    size_t i = 0;
+    while (i < n && isspace(head[i])) i++;
+    return memcmp(head + i, "solid", 5) != 0;
 }
 
 static size_t io_write(struct aiFile *a, const char *buf, size_t size, size_t count)
@@ -79,18 +113,22 @@ static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char 
     if (strpbrk(mode, "wa+") || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
         return NULL;
     struct aiFile *a = calloc(1, sizeof *a);
-    FILE *f = a ? fopen(path, "rb") : NULL;
+    io_state *state = calloc(1, sizeof *state);
+    FILE *f = a && state ? fopen(path, "rb") : NULL;
     if (!f) {
         free(a);
+        free(state);
         return NULL;
     }
+    state->f = f;
+    state->lower = stl_needs_lowering(path, f, (long long)st.st_size);
     a->ReadProc = io_read;
     a->WriteProc = io_write;
     a->TellProc = io_tell;
     a->FileSizeProc = io_size;
     a->SeekProc = io_seek;
     a->FlushProc = io_flush;
-    a->UserData = (aiUserData)(void *)f;
+    a->UserData = (aiUserData)(void *)state;
     return a;
 }
 
@@ -99,6 +137,7 @@ static void io_close(struct aiFileIO *io, struct aiFile *a)
     (void)io;
     if (a) {
         fclose(io_file(a));
+        free((void *)a->UserData);
         free(a);
     }
 }

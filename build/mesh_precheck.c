@@ -44,11 +44,11 @@ static mesh_format detect(const char *path, const unsigned char *head, size_t n)
         return FMT_STL;
     if (n >= 4 && memcmp(head, "ply", 3) == 0 && (head[3] == '\n' || head[3] == '\r'))
         return FMT_PLY;
+    if (mesh_starts_solid(head, n))
+        return FMT_STL;
     size_t i = 0;
     while (i < n && isspace(head[i]))
         i++;
-    if (n - i >= 5 && memcmp(head + i, "solid", 5) == 0)
-        return FMT_STL;
     size_t j = i;
     while (j < n && !isspace(head[j]))
         j++;

@@ -462,6 +462,10 @@ static void test_mesh_formats(void)
     check_mesh_file(data("meshes/ok/quad.off"), 2, 4, z3, two);
     check_mesh_file(data("meshes/ok/tet.ply"), 4, 4, z3, one);
     check_mesh_file(data("meshes/ok/tet.stl"), 4, 4, z3, one);
+    /* keywords in upper case (Assimp matches them in lower case only) */
+    check_mesh_file(data("meshes/ok/tet_upper.stl"), 4, 4, z3, one);
+    /* backslash continuations, joined as Assimp joins them */
+    check_mesh_file(data("meshes/ok/continued.obj"), 2, 4, z3, unit_xy);
     /* Node transforms: the root translates by (10,0,0) and holds the
      * triangle; its child scales by 2 and holds it again, so the child's
      * copy is scaled first, then translated. */
@@ -893,6 +897,7 @@ static const bad_case bad_meshes[] = {
     {"meshes/bad/truncated_header.ply", {"line 4", "end_header"}},
     {"meshes/bad/truncated.stl", {"line 5", "truncated"}},
     {"meshes/bad/four_vertices.stl", {"line 8", "4 vertices"}},
+    {"meshes/bad/continued_at_end.obj", {"line 4", "line continuation"}},
     {"meshes/bad/huge_counts.off", {"line 3", "truncated"}},
     {"meshes/bad/absurd_count.off", {"line 2", "out of range"}},
     {"meshes/bad/huge_counts.ply", {"line 10", "truncated"}},
