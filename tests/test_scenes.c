@@ -911,6 +911,11 @@ static const bad_case bad_meshes[] = {
     {"meshes/bad/bad_header.ply", {"line 7", "proprety"}},
     {"meshes/bad/duplicate_element.ply", {"line 9", "element 'face' declared twice"}},
     {"meshes/bad/garbage.dat", {"cannot import"}},
+    /* formats Assimp reads but lanes does not check: refused by extension */
+    {"meshes/bad/huge_count.x", {"'.x' is not one of them", ".obj, .ply, .off, .stl, .gltf and .glb"}},
+    {"meshes/bad/huge_count.nff", {"'.nff' is not one of them"}},
+    {"meshes/bad/index_oob.ac", {"'.ac' is not one of them"}},
+    {"meshes/bad/tiny.3ds", {"'.3ds' is not one of them"}},
     {"meshes/bad/index_oob.gltf", {"Assimp kept 1"}},
     {"meshes/bad/nan.gltf", {"not finite"}},
     {"meshes/bad/huge_accessor.gltf", {"out of range"}},
