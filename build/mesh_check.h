@@ -41,6 +41,9 @@ typedef struct mesh_stream {
     unsigned long long base; /* file offset of buf[0] */
     bool eof, ioerr;
     unsigned long line; /* number of the line last returned */
+    /* what the file declares or holds, for the import's memory bound
+     * (mesh_import_fits): set by each checker once it knows */
+    unsigned long long vertices, faces;
     char *ln;           /* that line, NUL-terminated, without \r\n */
     size_t ln_len, ln_cap;
 } mesh_stream;
@@ -57,6 +60,11 @@ bool mesh_fail_line(mesh_stream *s, const char *fmt, ...) PRINTF_LIKE(2, 3);
 bool mesh_fail_byte(mesh_stream *s, unsigned long long at, const char *fmt, ...) PRINTF_LIKE(3, 4);
 /* 1: a line is in s->ln; 0: end of file; -1: error (message set). */
 int mesh_get_line(mesh_stream *s);
+/* Whether importing s->vertices and s->faces fits in the memory this
+ * process may use (lanes_memory_fits); false with the message set. Called
+ * once a checker has read the whole file, so that the counts are the ones
+ * the file holds (a header that claims more is reported as truncated). */
+bool mesh_import_fits(mesh_stream *s);
 /* n bytes of binary data; false (message set) when the file ends first. */
 bool mesh_get_bytes(mesh_stream *s, void *dst, size_t n);
 

@@ -198,6 +198,9 @@ static bool check_obj(mesh_stream *s, char **held, size_t *held_cap)
             }
             if (kw.p[0] == 'l' && count < 2)
                 return mesh_fail_line(s, "a line element needs at least 2 vertices");
+            /* Assimp's OBJ reader makes a vertex per face corner */
+            s->faces++;
+            s->vertices += count;
         }
     }
     if (r < 0)
@@ -210,6 +213,7 @@ static bool check_obj(mesh_stream *s, char **held, size_t *held_cap)
         lanes_error_set(s->err, LANES_ERR_BAD_INPUT, "%s: no vertices", s->path);
         return false;
     }
+    s->vertices += v.count;
     return true;
 }
 

@@ -102,6 +102,8 @@ bool mesh_check_off(mesh_stream *s)
     if (nf > LANES_SCENE_MAX_TRIANGLES)
         return mesh_fail_line(s, "face count %llu exceeds the limit of %llu", nf,
                               (unsigned long long)LANES_SCENE_MAX_TRIANGLES);
+    s->vertices = nv;
+    s->faces = nf;
     for (unsigned long long v = 0; v < nv; v++) {
         r = off_body_line(s, &cur, "vertex");
         if (r < 0)

@@ -437,6 +437,9 @@ bool mesh_check_ply(mesh_stream *s)
     if (!ply_read_header(s, &fmt, &elems, &nelems))
         return false;
     unsigned long long nv = ply_vertex_count(s, elems, nelems);
+    s->vertices = nv;
+    for (int i = 0; i < nelems; i++)
+        if (strcmp(elems[i].name, "face") == 0) s->faces += elems[i].count;
     bool ok = nv > 0 && ply_check_body(s, fmt, elems, nelems, nv);
     free(elems);
     return ok;

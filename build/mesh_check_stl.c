@@ -115,6 +115,8 @@ static bool check_stl_ascii(mesh_stream *s)
         return false;
     if (in_facet)
         return mesh_fail_line(s, "file ends inside a facet (truncated?)");
+    s->vertices = 3 * facets;
+    s->faces = facets;
     if (facets == 0) {
         lanes_error_set(s->err, LANES_ERR_BAD_INPUT, "%s: no facets", s->path);
         return false;
@@ -154,6 +156,8 @@ bool mesh_check_stl(mesh_stream *s, long long size)
                 lanes_error_set(s->err, LANES_ERR_BAD_INPUT, "%s: binary STL with no triangles", s->path);
                 return false;
             }
+            s->vertices = 3ull * count;
+            s->faces = count;
             return check_stl_binary(s, count);
         }
     }

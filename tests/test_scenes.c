@@ -76,6 +76,9 @@ static void check_message(const char *what, const char *path, const char *msg,
         CHECK(strstr(msg, expect[i]) != NULL, "%s: message lacks '%s': %s", what, expect[i], msg);
 }
 
+static void put_f32(unsigned char *p, float f, bool big);
+static void put_u32(unsigned char *p, uint32_t w, bool big);
+
 static void write_file(const char *path, const void *bytes, size_t n)
 {
     FILE *f = fopen(path, "wb");
@@ -326,7 +329,43 @@ static void test_memory_limit(void)
     CHECK(st == LANES_ERR_BAD_INPUT && err.status == st, "LANES_MEMORY_LIMIT=lots: status %s, err.status %s",
           lanes_status_name(st), lanes_status_name(err.status));
     if (loaded) lanes_scene_free(&s);
+
+    /* The import's own memory counts vertices too: a binary PLY of 1M
+     * vertices and one face needs some 46 MB inside Assimp though its scene
+     * is one triangle, and is refused before Assimp reads it. */
+    char sparse[512];
+    snprintf(sparse, sizeof sparse, "%s/sparse.ply", g_scratch);
+    {
+        enum { NV = 1000000 };
+        char hdr[256];
+        int hn = snprintf(hdr, sizeof hdr,
+                          "ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\n"
+                          "property float y\nproperty float z\nelement face 1\n"
+                          "property list uchar int vertex_indices\nend_header\n",
+                          NV);
+        size_t bytes = (size_t)hn + (size_t)NV * 12 + 13;
+        unsigned char *buf = calloc(1, bytes);
+        memcpy(buf, hdr, (size_t)hn);
+        for (int i = 0; i < NV; i++) put_f32(buf + hn + 12 * i, (float)i, false); /* x = i: distinct */
+        unsigned char *f = buf + hn + (size_t)NV * 12;
+        f[0] = 3;
+        put_u32(f + 1, 0, false), put_u32(f + 5, 1, false), put_u32(f + 9, 2, false);
+        write_file(sparse, buf, bytes);
+        free(buf);
+    }
+    setenv("LANES_MEMORY_LIMIT", "20M", 1);
+    lanes_mesh m;
+    st = lanes_mesh_read(sparse, &m, &err);
+    CHECK(st == LANES_ERR_OUT_OF_MEMORY && strstr(err.message, "importing 1000000 vertices and 1 faces") &&
+              strstr(err.message, "LANES_MEMORY_LIMIT allows"),
+          "sparse PLY over LANES_MEMORY_LIMIT=20M: status %s: %s", lanes_status_name(st),
+          st == LANES_OK ? "loaded" : err.message);
+    if (st == LANES_OK) lanes_mesh_free(&m);
     unsetenv("LANES_MEMORY_LIMIT");
+    st = lanes_mesh_read(sparse, &m, &err);
+    CHECK(st == LANES_OK && m.triangle_count == 1, "sparse PLY without a limit: %s",
+          st == LANES_OK ? "wrong triangle count" : err.message);
+    if (st == LANES_OK) lanes_mesh_free(&m);
 
     /* this process: something positive */
     l = lanes_memory_limit_read();
