@@ -123,6 +123,14 @@ static inline bool mesh_starts_solid(const unsigned char *head, size_t n)
     return tok_is_nocase(t, "solid");
 }
 
+/* The triangle count a binary STL's 84-byte header declares (bytes 80-83,
+ * little-endian). */
+static inline unsigned long mesh_stl_declared_count(const unsigned char head[84])
+{
+    return (unsigned long)head[80] | (unsigned long)head[81] << 8 | (unsigned long)head[82] << 16 |
+           (unsigned long)head[83] << 24;
+}
+
 /* Printable form of a token for messages, cut short. */
 const char *mesh_tok_str(mesh_tok t, char out[48]);
 

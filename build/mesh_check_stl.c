@@ -137,8 +137,7 @@ bool mesh_check_stl(mesh_stream *s, long long size)
     /* The same rule Assimp uses: a file whose size matches its triangle
      * count is binary even when its 80-byte header starts with "solid". */
     if (got == sizeof head) {
-        unsigned long count = (unsigned long)head[80] | (unsigned long)head[81] << 8 |
-                              (unsigned long)head[82] << 16 | (unsigned long)head[83] << 24;
+        unsigned long count = mesh_stl_declared_count(head);
         /* Assimp's format detection compares in 32 bits, where a huge
          * count wraps around to the file size and the file is taken for
          * binary; refuse such a count here rather than rely on the
@@ -175,8 +174,7 @@ bool mesh_check_stl(mesh_stream *s, long long size)
                         s->path, size);
         return false;
     }
-    unsigned long count = (unsigned long)head[80] | (unsigned long)head[81] << 8 |
-                          (unsigned long)head[82] << 16 | (unsigned long)head[83] << 24;
+    unsigned long count = mesh_stl_declared_count(head);
     lanes_error_set(s->err, LANES_ERR_BAD_INPUT,
                     "%s: binary STL declares %lu triangles (%llu bytes) but the file "
                     "has %lld bytes (truncated?)",

@@ -65,8 +65,7 @@ static bool stl_needs_lowering(const char *path, FILE *f, long long size)
     rewind(f);
     if (!mesh_starts_solid(head, n)) return false;
     if (n == sizeof head) {
-        unsigned long long count = (unsigned long long)head[80] | (unsigned long long)head[81] << 8 |
-                                   (unsigned long long)head[82] << 16 | (unsigned long long)head[83] << 24;
+        unsigned long long count = mesh_stl_declared_count(head);
         if ((unsigned long long)size == 84ull + 50ull * count) return false;
     }
     return true;
