@@ -56,6 +56,13 @@ target_include_directories(test_simd_ops PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME kernels.simd_ops COMMAND test_simd_ops)
 list(APPEND lanes_kernel_tests kernels.simd_ops)
 
+# The exact sign of t that decides the watertight test's hits at t ~ 0
+# (trace/kernels/exact_sign.h, plain C) against 128-bit integer arithmetic.
+add_executable(test_exact_sign ${CMAKE_CURRENT_LIST_DIR}/test_exact_sign.c)
+target_link_libraries(test_exact_sign PRIVATE lanes_internal)
+add_test(NAME kernels.exact_sign COMMAND test_exact_sign)
+list(APPEND lanes_kernel_tests kernels.exact_sign)
+
 # The tests pick their sets themselves: the environment of whoever runs
 # ctest must not narrow them.
 set_tests_properties(${lanes_kernel_tests} PROPERTIES
