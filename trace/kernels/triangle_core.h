@@ -8,13 +8,17 @@
 #ifndef LANES_TRACE_TRIANGLE_CORE_H
 #define LANES_TRACE_TRIANGLE_CORE_H
 
+#include "trace/kernels/exact_sign.h"
 #include "trace/kernels/kernel_common.h"
 
 #include <float.h>
 
+/* near_zero: lanes (watertight test only) that pass the edge tests but
+ * whose t lies within its rounding bound of 0, so its sign is in doubt;
+ * they are not in hit until wt_settle_near_zero has decided them. */
 typedef struct {
     vfloat t, u, v;
-    vmask hit;
+    vmask hit, near_zero;
 } tri_result;
 
 /* Möller–Trumbore (1997). Epsilon policy: none. The test rejects only
@@ -50,6 +54,7 @@ LANES_BODY tri_result moller_core(vfloat ox, vfloat oy, vfloat oz, vfloat dx, vf
     m = vm_and(m, vf_le(vf_add(u, v), vf_set1(1.0f)));
     m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
     r.hit = m;
+    r.near_zero = vm_false();
     r.t = t;
     r.u = want_uv ? u : zero;
     r.v = want_uv ? v : zero;
@@ -62,6 +67,42 @@ static inline float narrow_signed(double x)
     float f = (float)x;
     if (f == 0.0f && x != 0.0) f = x > 0.0 ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
     return f;
+}
+
+LANES_BODY vfloat max3_abs(vfloat a, vfloat b, vfloat c)
+{
+    return vf_max(vf_abs(a), vf_max(vf_abs(b), vf_abs(c)));
+}
+
+/* Whether a watertight t may have the wrong sign: |t| not above the bound
+ * on its rounding error that Pharr, Jakob and Humphreys derive (Physically
+ * Based Rendering, 3rd ed., 3.9.6) for t = (U Az + V Bz + W Cz) / det, with
+ * the edge functions' size divided by det before it multiplies anything,
+ * so that nothing overflows (for a hit, U, V and W share a sign and
+ * max |U, V, W| <= |det|). Twice the bound: t is formed here from the
+ * barycentrics, a few roundings more. A NaN bound leaves a finite t in
+ * doubt; an infinite or NaN t is not a question of sign (its distance
+ * overflowed) and keeps the verdict of the interval test. */
+LANES_BODY vmask wt_t_in_doubt(vfloat t, vfloat Ax, vfloat Ay, vfloat Az, vfloat Bx, vfloat By,
+                               vfloat Bz, vfloat Cx, vfloat Cy, vfloat Cz, vfloat U, vfloat V,
+                               vfloat W, vfloat inv)
+{
+    const float u = 0.5f * FLT_EPSILON;
+#define LANES_GAMMA(n) ((n) * u / (1.0f - (n) * u))
+    vfloat mx = max3_abs(Ax, Bx, Cx), my = max3_abs(Ay, By, Cy), mz = max3_abs(Az, Bz, Cz);
+    vfloat ai = vf_abs(inv);
+    vfloat e_over_det = vf_mul(max3_abs(U, V, W), ai);
+    vfloat dx = vf_mul(vf_set1(LANES_GAMMA(5)), vf_add(mx, mz));
+    vfloat dy = vf_mul(vf_set1(LANES_GAMMA(5)), vf_add(my, mz));
+    vfloat de_over_det = vf_mul(vf_set1(LANES_GAMMA(2)), vf_mul(vf_mul(mx, ai), my));
+    de_over_det = vf_add(de_over_det, vf_mul(vf_mul(dy, ai), mx));
+    de_over_det = vf_add(de_over_det, vf_mul(vf_mul(dx, ai), my));
+    de_over_det = vf_mul(vf_set1(2.0f), de_over_det);
+    vfloat bound = vf_mul(vf_mul(vf_set1(6.0f), mz),
+                          vf_add(vf_mul(vf_set1(2.0f * LANES_GAMMA(3)), e_over_det), de_over_det));
+#undef LANES_GAMMA
+    vmask finite = vf_lt(vf_abs(t), vf_set1(INFINITY));
+    return vm_andnot(finite, vf_gt(vf_abs(t), bound));
 }
 
 /* Woop, Benthin and Wald (2013), after the per-ray permutation: a, b, c are
@@ -109,7 +150,7 @@ LANES_BODY tri_result watertight_core(vfloat ax, vfloat ay, vfloat az, vfloat bx
     vmask m = vm_andnot(live, vm_and(any_neg, any_pos));
     m = vm_and(m, vf_neq(det, zero));
     if (vm_none(m)) {
-        r.hit = m;
+        r.hit = r.near_zero = m;
         r.t = r.u = r.v = zero;
         return r;
     }
@@ -120,12 +161,26 @@ LANES_BODY tri_result watertight_core(vfloat ax, vfloat ay, vfloat az, vfloat bx
     vfloat inv = vf_rcp(det);
     vfloat b0 = vf_mul(U, inv), b1 = vf_mul(V, inv), b2 = vf_mul(W, inv);
     vfloat t = vf_add(vf_add(vf_mul(b0, Az), vf_mul(b1, Bz)), vf_mul(b2, Cz));
+    r.near_zero = vm_and(m, wt_t_in_doubt(t, Ax, Ay, Az, Bx, By, Bz, Cx, Cy, Cz, U, V, W, inv));
+    m = vm_andnot(m, r.near_zero);
     m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
     r.hit = m;
     r.t = t;
     r.u = want_uv ? b1 : zero;
     r.v = want_uv ? b2 : zero;
     return r;
+}
+
+/* A near_zero lane's verdict once the exact sign of t is known: t moved to
+ * that side of 0, then the closed interval as for every hit. A ray parallel
+ * to the plane misses; non-finite data keeps the computed t. */
+static inline bool wt_settle_lane(float *t, int sign, float tnear, float tfar)
+{
+    if (sign == EXACT_T_PARALLEL) return false;
+    float settled = sign == EXACT_T_NOT_FINITE ? *t : t_on_exact_side(*t, sign);
+    if (!(settled >= tnear && settled <= tfar)) return false;
+    *t = settled;
+    return true;
 }
 
 /* The watertight test's per-ray set-up: kz the axis of largest |d|, kx and ky
@@ -161,6 +216,27 @@ LANES_BODY vfloat pick3(vmask is0, vmask is1, vfloat x, vfloat y, vfloat z)
     return vf_select(is0, x, vf_select(is1, y, z));
 }
 
+/* Decides the near_zero lanes of one triangle against a packet's rays
+ * (the axes not permuted: the sign of t does not depend on their order). */
+static inline void wt_settle_rays(tri_result *h, const lanes_vray *r, const lanes_triangle *tri)
+{
+    float ox[LANES_W], oy[LANES_W], oz[LANES_W], dx[LANES_W], dy[LANES_W], dz[LANES_W];
+    float tnear[LANES_W], tfar[LANES_W], t[LANES_W];
+    vf_storeu(ox, r->ox), vf_storeu(oy, r->oy), vf_storeu(oz, r->oz);
+    vf_storeu(dx, r->dx), vf_storeu(dy, r->dy), vf_storeu(dz, r->dz);
+    vf_storeu(tnear, r->tnear), vf_storeu(tfar, r->tfar), vf_storeu(t, h->t);
+    uint32_t doubt = vm_bits(h->near_zero), hits = 0;
+    for (int j = 0; j < LANES_W; j++) {
+        if (!(doubt & (1u << j))) continue;
+        const float o[3] = {ox[j], oy[j], oz[j]}, d[3] = {dx[j], dy[j], dz[j]};
+        int sign = exact_plane_t_sign(tri->v0, tri->v1, tri->v2, o, d);
+        if (wt_settle_lane(&t[j], sign, tnear[j], tfar[j])) hits |= 1u << j;
+    }
+    h->t = vf_loadu(t);
+    h->hit = vm_or(h->hit, vm_from_bits(hits));
+    h->near_zero = vm_false();
+}
+
 LANES_BODY tri_result watertight_packet_core(const lanes_vray *r, const lanes_triangle *tri,
                                              bool want_uv)
 {
@@ -187,12 +263,14 @@ LANES_BODY tri_result watertight_packet_core(const lanes_vray *r, const lanes_tr
            b2 = vf_sub(vf_set1(tri->v1[2]), r->oz);
     vfloat c0 = vf_sub(vf_set1(tri->v2[0]), r->ox), c1 = vf_sub(vf_set1(tri->v2[1]), r->oy),
            c2 = vf_sub(vf_set1(tri->v2[2]), r->oz);
-    return watertight_core(pick3(x0, x1, a0, a1, a2), pick3(y0, y1, a0, a1, a2),
-                           pick3(z0, z1, a0, a1, a2), pick3(x0, x1, b0, b1, b2),
-                           pick3(y0, y1, b0, b1, b2), pick3(z0, z1, b0, b1, b2),
-                           pick3(x0, x1, c0, c1, c2), pick3(y0, y1, c0, c1, c2),
-                           pick3(z0, z1, c0, c1, c2), sx, sy, sz, r->tnear, r->tfar, r->live,
-                           want_uv);
+    tri_result h = watertight_core(pick3(x0, x1, a0, a1, a2), pick3(y0, y1, a0, a1, a2),
+                                   pick3(z0, z1, a0, a1, a2), pick3(x0, x1, b0, b1, b2),
+                                   pick3(y0, y1, b0, b1, b2), pick3(z0, z1, b0, b1, b2),
+                                   pick3(x0, x1, c0, c1, c2), pick3(y0, y1, c0, c1, c2),
+                                   pick3(z0, z1, c0, c1, c2), sx, sy, sz, r->tnear, r->tfar,
+                                   r->live, want_uv);
+    if (vm_any(h.near_zero)) wt_settle_rays(&h, r, tri);
+    return h;
 }
 
 LANES_BODY vmask tris_have_area(vfloat ax, vfloat ay, vfloat az, vfloat bx, vfloat by, vfloat bz,
@@ -211,7 +289,7 @@ LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
                                   const lanes_triangle *tri, bool want_uv)
 {
     if (lanes_triangle_no_area(tri)) {
-        tri_result none = {vf_zero(), vf_zero(), vf_zero(), vm_false()};
+        tri_result none = {vf_zero(), vf_zero(), vf_zero(), vm_false(), vm_false()};
         return none;
     }
     if (algo == LANES_TRI_WATERTIGHT) return watertight_packet_core(r, tri, want_uv);
@@ -230,6 +308,7 @@ LANES_BODY tri_result tri_vs_rays(lanes_tri_algo algo, const lanes_vray *r,
 typedef struct {
     int field[3][3];
     const float *soa[9];
+    float o_perm[3], d_perm[3]; /* the ray in field's axis order */
     vfloat ox, oy, oz, dx, dy, dz, sx, sy, sz, tnear, tfar;
 } wide_setup;
 
@@ -254,20 +333,51 @@ LANES_BODY void wide_setup_init(wide_setup *w, lanes_tri_algo algo, const lanes_
     }
     for (int vtx = 0; vtx < 3; vtx++)
         for (int a = 0; a < 3; a++) w->field[vtx][a] = vtx * 3 + order[a];
+    for (int a = 0; a < 3; a++) {
+        w->o_perm[a] = o[a];
+        w->d_perm[a] = ray->d[order[a]];
+    }
     w->ox = vf_set1(o[0]), w->oy = vf_set1(o[1]), w->oz = vf_set1(o[2]);
     w->dx = vf_set1(ray->d[0]), w->dy = vf_set1(ray->d[1]), w->dz = vf_set1(ray->d[2]);
     w->sx = vf_set1(sx), w->sy = vf_set1(sy), w->sz = vf_set1(sz);
     w->tnear = vf_set1(ray->tnear), w->tfar = vf_set1(ray->tfar);
 }
 
+/* Decides the near_zero lanes of one ray against LANES_W triangles, all in
+ * field's axis order (the sign of t does not depend on the order). */
+static inline void wt_settle_tris(tri_result *h, const wide_setup *w, vfloat v[3][3], vfloat tfar)
+{
+    float vert[3][3][LANES_W], t[LANES_W], far[LANES_W];
+    for (int c = 0; c < 3; c++)
+        for (int a = 0; a < 3; a++) vf_storeu(vert[c][a], v[c][a]);
+    vf_storeu(t, h->t), vf_storeu(far, tfar);
+    float tnear = vf_lane(w->tnear, 0);
+    uint32_t doubt = vm_bits(h->near_zero), hits = 0;
+    for (int j = 0; j < LANES_W; j++) {
+        if (!(doubt & (1u << j))) continue;
+        float p[3][3];
+        for (int c = 0; c < 3; c++)
+            for (int a = 0; a < 3; a++) p[c][a] = vert[c][a][j];
+        int sign = exact_plane_t_sign(p[0], p[1], p[2], w->o_perm, w->d_perm);
+        if (wt_settle_lane(&t[j], sign, tnear, far[j])) hits |= 1u << j;
+    }
+    h->t = vf_loadu(t);
+    h->hit = vm_or(h->hit, vm_from_bits(hits));
+    h->near_zero = vm_false();
+}
+
 LANES_BODY tri_result ray_vs_vectors(lanes_tri_algo algo, const wide_setup *w, vfloat v[3][3],
                                      vfloat tfar, vmask live, bool want_uv)
 {
-    if (algo == LANES_TRI_WATERTIGHT)
-        return watertight_core(vf_sub(v[0][0], w->ox), vf_sub(v[0][1], w->oy), vf_sub(v[0][2], w->oz),
-                               vf_sub(v[1][0], w->ox), vf_sub(v[1][1], w->oy), vf_sub(v[1][2], w->oz),
-                               vf_sub(v[2][0], w->ox), vf_sub(v[2][1], w->oy), vf_sub(v[2][2], w->oz),
-                               w->sx, w->sy, w->sz, w->tnear, tfar, live, want_uv);
+    if (algo == LANES_TRI_WATERTIGHT) {
+        tri_result h = watertight_core(
+            vf_sub(v[0][0], w->ox), vf_sub(v[0][1], w->oy), vf_sub(v[0][2], w->oz),
+            vf_sub(v[1][0], w->ox), vf_sub(v[1][1], w->oy), vf_sub(v[1][2], w->oz),
+            vf_sub(v[2][0], w->ox), vf_sub(v[2][1], w->oy), vf_sub(v[2][2], w->oz), w->sx, w->sy,
+            w->sz, w->tnear, tfar, live, want_uv);
+        if (vm_any(h.near_zero)) wt_settle_tris(&h, w, v, tfar);
+        return h;
+    }
     return moller_core(w->ox, w->oy, w->oz, w->dx, w->dy, w->dz, v[0][0], v[0][1], v[0][2], v[1][0],
                        v[1][1], v[1][2], v[2][0], v[2][1], v[2][2], w->tnear, tfar, live, want_uv);
 }
