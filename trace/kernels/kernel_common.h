@@ -15,6 +15,11 @@
  * counting code at all. That only works when the body is really inlined. */
 #define LANES_BODY static inline __attribute__((always_inline))
 
+/* A rare path (an exact fallback) kept out of line, so that the hot loop
+ * that calls it keeps its registers and its code size; static (one copy
+ * per kernel set) but not inline, and unused in files that never call it. */
+#define LANES_COLD static __attribute__((noinline, cold, unused))
+
 /* Lane accounting for one vector iteration whose real lanes are `live`. */
 #define LANES_COUNT(stats, live)                                                           \
     do {                                                                                   \

@@ -15,7 +15,8 @@
 
 /* near_zero: lanes (watertight test only) that pass the edge tests but
  * whose t lies within its rounding bound of 0, so its sign is in doubt;
- * they are not in hit until wt_settle_near_zero has decided them. */
+ * they are not in hit until wt_settle_rays or wt_settle_tris has decided
+ * them. */
 typedef struct {
     vfloat t, u, v;
     vmask hit, near_zero;
@@ -76,31 +77,29 @@ LANES_BODY vfloat max3_abs(vfloat a, vfloat b, vfloat c)
 
 /* Whether a watertight t may have the wrong sign: |t| not above the bound
  * on its rounding error that Pharr, Jakob and Humphreys derive (Physically
- * Based Rendering, 3rd ed., 3.9.6) for t = (U Az + V Bz + W Cz) / det, with
- * the edge functions' size divided by det before it multiplies anything,
- * so that nothing overflows (for a hit, U, V and W share a sign and
- * max |U, V, W| <= |det|). Twice the bound: t is formed here from the
- * barycentrics, a few roundings more. A NaN bound leaves a finite t in
- * doubt; an infinite or NaN t is not a question of sign (its distance
- * overflowed) and keeps the verdict of the interval test. */
+ * Based Rendering, 3rd ed., 3.9.6) for t = (U Az + V Bz + W Cz) / det,
+ * doubled (t is formed here from the barycentrics, a few roundings more)
+ * and loosened where that saves work: a lane that passed the edge tests
+ * has U, V and W of one sign, so max |U, V, W| <= |det| and the term in
+ * e / det is at most 1; gamma(2) is raised to gamma(5). The edge functions'
+ * size is divided by det before it multiplies anything, so nothing
+ * overflows. A NaN bound leaves a finite t in doubt; an infinite or NaN t
+ * is not a question of sign (its distance overflowed) and keeps the
+ * verdict of the interval test. */
 LANES_BODY vmask wt_t_in_doubt(vfloat t, vfloat Ax, vfloat Ay, vfloat Az, vfloat Bx, vfloat By,
-                               vfloat Bz, vfloat Cx, vfloat Cy, vfloat Cz, vfloat U, vfloat V,
-                               vfloat W, vfloat inv)
+                               vfloat Bz, vfloat Cx, vfloat Cy, vfloat Cz, vfloat inv)
 {
     const float u = 0.5f * FLT_EPSILON;
 #define LANES_GAMMA(n) ((n) * u / (1.0f - (n) * u))
-    vfloat mx = max3_abs(Ax, Bx, Cx), my = max3_abs(Ay, By, Cy), mz = max3_abs(Az, Bz, Cz);
-    vfloat ai = vf_abs(inv);
-    vfloat e_over_det = vf_mul(max3_abs(U, V, W), ai);
-    vfloat dx = vf_mul(vf_set1(LANES_GAMMA(5)), vf_add(mx, mz));
-    vfloat dy = vf_mul(vf_set1(LANES_GAMMA(5)), vf_add(my, mz));
-    vfloat de_over_det = vf_mul(vf_set1(LANES_GAMMA(2)), vf_mul(vf_mul(mx, ai), my));
-    de_over_det = vf_add(de_over_det, vf_mul(vf_mul(dy, ai), mx));
-    de_over_det = vf_add(de_over_det, vf_mul(vf_mul(dx, ai), my));
-    de_over_det = vf_mul(vf_set1(2.0f), de_over_det);
-    vfloat bound = vf_mul(vf_mul(vf_set1(6.0f), mz),
-                          vf_add(vf_mul(vf_set1(2.0f * LANES_GAMMA(3)), e_over_det), de_over_det));
+    /* PBRT: 3 mz (2 gamma3 e + 2 (gamma2 mx my + dy mx + dx my)) / |det|
+     * with dx = gamma5 (mx + mz), dy = gamma5 (my + mz); doubled. */
+    const float k0 = 12.0f * LANES_GAMMA(3);
+    const float kxy = 12.0f * 3.0f * LANES_GAMMA(5), kz = 12.0f * LANES_GAMMA(5);
 #undef LANES_GAMMA
+    vfloat mx = max3_abs(Ax, Bx, Cx), my = max3_abs(Ay, By, Cy), mz = max3_abs(Az, Bz, Cz);
+    vfloat sliver = vf_add(vf_mul(vf_set1(kxy), vf_mul(mx, my)),
+                           vf_mul(vf_set1(kz), vf_mul(mz, vf_add(mx, my))));
+    vfloat bound = vf_mul(mz, vf_add(vf_set1(k0), vf_mul(sliver, vf_abs(inv))));
     vmask finite = vf_lt(vf_abs(t), vf_set1(INFINITY));
     return vm_andnot(finite, vf_gt(vf_abs(t), bound));
 }
@@ -161,7 +160,7 @@ LANES_BODY tri_result watertight_core(vfloat ax, vfloat ay, vfloat az, vfloat bx
     vfloat inv = vf_rcp(det);
     vfloat b0 = vf_mul(U, inv), b1 = vf_mul(V, inv), b2 = vf_mul(W, inv);
     vfloat t = vf_add(vf_add(vf_mul(b0, Az), vf_mul(b1, Bz)), vf_mul(b2, Cz));
-    r.near_zero = vm_and(m, wt_t_in_doubt(t, Ax, Ay, Az, Bx, By, Bz, Cx, Cy, Cz, U, V, W, inv));
+    r.near_zero = vm_and(m, wt_t_in_doubt(t, Ax, Ay, Az, Bx, By, Bz, Cx, Cy, Cz, inv));
     m = vm_andnot(m, r.near_zero);
     m = vm_and(m, vm_and(vf_ge(t, tnear), vf_le(t, tfar)));
     r.hit = m;
@@ -218,7 +217,7 @@ LANES_BODY vfloat pick3(vmask is0, vmask is1, vfloat x, vfloat y, vfloat z)
 
 /* Decides the near_zero lanes of one triangle against a packet's rays
  * (the axes not permuted: the sign of t does not depend on their order). */
-static inline void wt_settle_rays(tri_result *h, const lanes_vray *r, const lanes_triangle *tri)
+LANES_COLD void wt_settle_rays(tri_result *h, const lanes_vray *r, const lanes_triangle *tri)
 {
     float ox[LANES_W], oy[LANES_W], oz[LANES_W], dx[LANES_W], dy[LANES_W], dz[LANES_W];
     float tnear[LANES_W], tfar[LANES_W], t[LANES_W];
@@ -345,7 +344,7 @@ LANES_BODY void wide_setup_init(wide_setup *w, lanes_tri_algo algo, const lanes_
 
 /* Decides the near_zero lanes of one ray against LANES_W triangles, all in
  * field's axis order (the sign of t does not depend on the order). */
-static inline void wt_settle_tris(tri_result *h, const wide_setup *w, vfloat v[3][3], vfloat tfar)
+LANES_COLD void wt_settle_tris(tri_result *h, const wide_setup *w, vfloat v[3][3], vfloat tfar)
 {
     float vert[3][3][LANES_W], t[LANES_W], far[LANES_W];
     for (int c = 0; c < 3; c++)
