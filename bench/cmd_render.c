@@ -120,6 +120,10 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     lanes_scene_plan_make(&scene, accuracy, &plan);
     po.base.accuracy = plan.accuracy;
     if (explain) lanes_scene_plan_explain(&plan, stdout);
+    if (lanes_scene_plan_check(&plan, &err) != LANES_OK) {
+        lanes_scene_free(&scene);
+        cli_fail("%s: %s", scene_spec, err.message);
+    }
     /* The wide scheme goes through the public API (lanes/lanes.h), as a
      * program linking liblanes would; the others use the internal BVHs. */
     bool use_api = !packets && single_scheme == LANES_SCHEME_WIDE;

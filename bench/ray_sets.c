@@ -66,10 +66,7 @@ lanes_ray *ray_set_camera(const lanes_scene *s, int w, int h, ray_order order, s
 surface_point *ray_set_surface_points(const lanes_scene *s, const lanes_ray *rays, const lanes_hit *hits,
                                       size_t n, size_t *count)
 {
-    float lo[3], hi[3];
-    lanes_scene_bounds(s, lo, hi);
-    vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
-    float eps = 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
+    float eps = lanes_scene_epsilon(s);
     surface_point *pts = malloc((n ? n : 1) * sizeof *pts);
     if (!pts) return NULL;
     size_t m = 0;

@@ -13,7 +13,7 @@
  *            miss both triangles: that is what "leaks" count); secondary rays
  *            start at tnear = 0 from the barycentric hit point moved along the
  *            geometric normal by lanes_scene_epsilon (1e-5 of the scene
- *            diagonal plus 1e-6).
+ *            diagonal, in build/scene.h).
  *   robust   exact reciprocals, the watertight test (Woop, Benthin, Wald
  *            2013, double-precision fallback when an edge function is 0),
  *            box exits widened by 1 + 2 gamma(3) (Ize 2013), and secondary

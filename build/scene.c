@@ -66,6 +66,18 @@ void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3])
     }
 }
 
+float lanes_scene_epsilon(const lanes_scene *scene)
+{
+    float lo[3], hi[3];
+    lanes_scene_bounds(scene, lo, hi);
+    double diag2 = 0.0;
+    for (int a = 0; a < 3; a++) {
+        if (!(lo[a] <= hi[a])) return 0.0f;
+        diag2 += ((double)hi[a] - lo[a]) * ((double)hi[a] - lo[a]);
+    }
+    return (float)(1e-5 * sqrt(diag2));
+}
+
 /* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
  * geometric so repeated appends stay linear overall; every size is checked
  * against SIZE_MAX before multiplying. */

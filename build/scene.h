@@ -124,6 +124,16 @@ void lanes_scene_free(lanes_scene *scene);
  * skipped; with no finite vertex, min = +inf and max = -inf. */
 void lanes_scene_bounds(const lanes_scene *scene, float min[3], float max[3]);
 
+/* How far fast and default modes push secondary origins off their surface:
+ * 1e-5 of the bounding-box diagonal, with no absolute term, so a scene
+ * scaled by any factor renders the same (a fixed 1e-6 term displaced
+ * shadows at scale 1e-6 and blackened everything at 1e-7). Whether the
+ * offset also clears the rounding of coordinates far from the origin is
+ * the scene plan's question (trace/scene_plan.h). 0 for a scene without a
+ * finite vertex. The diagonal is summed in double: squaring a coordinate
+ * difference of 1e18 in float would overflow. */
+float lanes_scene_epsilon(const lanes_scene *scene);
+
 /* Append helpers. They grow the arrays geometrically with overflow-checked
  * sizes, refuse more than LANES_SCENE_MAX_TRIANGLES triangles or the
  * scene's triangle_budget (checked at every count, not only when the arrays

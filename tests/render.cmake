@@ -48,3 +48,13 @@ add_test(NAME render.isa.robust
 set_tests_properties(render.isa.robust PROPERTIES
   LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77
   ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
+# Every accuracy mode at scales 10^-17..10^17 and at growing distances from
+# the origin: the unit-scale image, or a refusal naming the size limit
+# (trace/scene_plan.h), with scalar and the best set (test_scale_sweep.c).
+add_executable(test_scale_sweep ${CMAKE_CURRENT_LIST_DIR}/test_scale_sweep.c)
+target_link_libraries(test_scale_sweep PRIVATE lanes_render lanes_image)
+file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/scale_sweep)
+add_test(NAME render.scale_sweep COMMAND test_scale_sweep ${CMAKE_CURRENT_BINARY_DIR}/scale_sweep)
+set_tests_properties(render.scale_sweep PROPERTIES
+  LABELS render TIMEOUT 600
+  ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")

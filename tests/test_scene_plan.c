@@ -5,7 +5,7 @@
  *    caller, else the scene file, else the default.
  * 2. The robust recommendation: a sphere at the origin does not get it, the
  *    same sphere 1e5 units away does, and the threshold sits where the
- *    fixed offset falls below LANES_PLAN_MIN_EPSILON_ULPS ulps.
+ *    fixed offset falls below the offset robust mode's error bound gives.
  * 3. What the recommendation is for: the far sphere of
  *    tests/data/scenes/ok/far_robust.json, rendered in default mode, is
  *    darkened by shadow acne (secondary rays hitting the surface they
@@ -109,12 +109,13 @@ static void decisions(void)
 
 static void recommendation(void)
 {
-    /* the offset is 1e-5 of the diagonal (about 3.5, so 3.5e-5): it is
-     * 16 ulps of a coordinate of about 3.5e-5 * 2^23 / 16 = 18 */
+    /* the offset is 1e-5 of the diagonal (about 3.5, so 3.5e-5); robust
+     * mode's bound at a coordinate X is 2 sqrt(3) u X plus sqrt(3) ulps of
+     * X: 2.7e-5 at X = 65, 5.3e-5 at X = 129 (the ulp doubles at 128) */
     static const struct {
         double offset;
         bool recommend;
-    } cases[] = {{0.0, false}, {4.0, false}, {64.0, true}, {1e3, true}, {1e5, true}};
+    } cases[] = {{0.0, false}, {4.0, false}, {64.0, false}, {128.0, true}, {1e3, true}, {1e5, true}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         lanes_scene s;
         if (!sphere_scene(&s, LANES_MAT_DIFFUSE, 1, cases[i].offset)) {
@@ -126,8 +127,9 @@ static void recommendation(void)
         CHECK(p.recommend_robust == cases[i].recommend,
               "sphere at %g: recommend robust %d (offset %.3g ulps of %.6g), expected %d", cases[i].offset,
               p.recommend_robust, p.epsilon_ulps, p.extent, cases[i].recommend);
-        CHECK(p.recommend_robust == (p.epsilon_ulps < LANES_PLAN_MIN_EPSILON_ULPS),
-              "sphere at %g: the recommendation follows the threshold", cases[i].offset);
+        CHECK(p.recommend_robust == (p.epsilon < p.offset_bound),
+              "sphere at %g: the recommendation follows robust mode's bound (%.3g against %.3g)",
+              cases[i].offset, p.epsilon, p.offset_bound);
         lanes_scene_free(&s);
     }
 }

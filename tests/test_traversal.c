@@ -964,7 +964,7 @@ static int run_embree(const char *name, long nrays)
     float blo[3], bhi[3];
     lanes_scene_bounds(&s, blo, bhi);
     vec3 diag = v3_sub(v3_load(bhi), v3_load(blo));
-    float eps = 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
+    float eps = lanes_scene_epsilon(&s);
     vec3 light = s.point_light_count ? v3_load(s.point_lights[0].position)
                                      : v3_add(v3_scale(v3_add(v3_load(blo), v3_load(bhi)), 0.5f),
                                            v3_scale(v3_normalize(v3_load(c->up)), sqrtf(v3_dot(diag, diag))));

@@ -631,6 +631,8 @@ lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_ac
                                (int)opt->base.accuracy);
     }
     lanes_scene_plan_make(scene, opt->base.accuracy, &job.plan);
+    lanes_status fits = lanes_scene_plan_check(&job.plan, err);
+    if (fits != LANES_OK) return fits;
     job.resolved = *opt;
     job.resolved.base.accuracy = job.plan.accuracy;
     job.opt = &job.resolved;

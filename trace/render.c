@@ -276,6 +276,8 @@ lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *ac
                                (int)opt->accuracy);
     }
     lanes_scene_plan_make(scene, opt->accuracy, &job.plan);
+    lanes_status fits = lanes_scene_plan_check(&job.plan, err);
+    if (fits != LANES_OK) return fits;
     job.resolved = *opt;
     job.resolved.accuracy = job.plan.accuracy;
     job.opt = &job.resolved;

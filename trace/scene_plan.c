@@ -1,10 +1,11 @@
 /* The render plan of a scene (see scene_plan.h). */
 #include "trace/scene_plan.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
-#include "trace/shading.h"
+
 
 void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_plan *plan)
 {
@@ -23,20 +24,41 @@ void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_
 
     float lo[3], hi[3];
     lanes_scene_bounds(scene, lo, hi);
-    double diag2 = 0.0, extent = 0.0;
+    double diag2 = 0.0, reach2 = 0.0, extent = 0.0;
+    plan->has_vertices = true;
     for (int a = 0; a < 3; a++) {
-        if (!(lo[a] <= hi[a])) continue; /* no finite vertex */
-        diag2 += ((double)hi[a] - lo[a]) * ((double)hi[a] - lo[a]);
-        extent = fmax(extent, fmax(fabs((double)lo[a]), fabs((double)hi[a])));
+        if (!(lo[a] <= hi[a])) { /* no finite vertex */
+            plan->has_vertices = false;
+            break;
+        }
+        double l = lo[a], h = hi[a], e = scene->camera.eye[a];
+        diag2 += (h - l) * (h - l);
+        reach2 += (fmax(h, e) - fmin(l, e)) * (fmax(h, e) - fmin(l, e));
+        extent = fmax(extent, fmax(fabs(l), fabs(h)));
     }
-    plan->extent = extent;
-    plan->diagonal = sqrt(diag2);
+    double edge2 = 0.0;
+    for (size_t t = 0; plan->has_vertices && t < scene->triangle_count; t++) {
+        const float *v = scene->verts + 9 * t;
+        for (int k = 0; k < 3; k++) {
+            const float *p = v + 3 * k, *q = v + 3 * ((k + 1) % 3);
+            double dx = (double)q[0] - p[0], dy = (double)q[1] - p[1], dz = (double)q[2] - p[2];
+            double d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 > edge2) edge2 = d2; /* a NaN (non-finite vertex) is skipped */
+        }
+    }
+    plan->extent = plan->has_vertices ? extent : 0.0;
+    plan->diagonal = plan->has_vertices ? sqrt(diag2) : 0.0;
+    plan->reach = plan->has_vertices ? sqrt(reach2) : 0.0;
+    plan->longest_edge = sqrt(edge2);
     plan->epsilon = lanes_scene_epsilon(scene);
     int e;
-    frexp(extent > 0.0 ? extent : 1.0, &e);
+    frexp(plan->extent > 0.0 ? plan->extent : 1.0, &e);
     double ulp = ldexp(1.0, e - 24); /* spacing of floats just below 2^e */
     plan->epsilon_ulps = plan->epsilon / ulp;
-    plan->recommend_robust = plan->epsilon_ulps < LANES_PLAN_MIN_EPSILON_ULPS;
+    const double u = 0x1p-24, gamma3 = 3.0 * u / (1.0 - 3.0 * u);
+    double perr = u * plan->extent + gamma3 * plan->longest_edge; /* per coordinate */
+    plan->offset_bound = 2.0 * sqrt(3.0) * perr + sqrt(3.0) * ulp;
+    plan->recommend_robust = plan->epsilon < plan->offset_bound;
 
     if (requested >= 0 && requested < LANES_ACCURACY_COUNT) {
         plan->accuracy = (lanes_accuracy)requested;
@@ -75,19 +97,57 @@ void lanes_scene_plan_explain(const lanes_scene_plan *p, FILE *out)
                 : "no ray leaves a surface: hits are shaded by their material alone, without "
                   "barycentrics or normals");
     fprintf(out, "  accuracy         %s (from %s)\n", lanes_accuracy_name(p->accuracy), p->accuracy_from);
-    fprintf(out, "    coordinates reach %.6g, bounding-box diagonal %.6g: the fast/default "
-                 "offset %.3g is %.3g ulps of the largest coordinate\n",
-            p->extent, p->diagonal, p->epsilon, p->epsilon_ulps);
-    if (p->recommend_robust && p->accuracy != LANES_ACCURACY_ROBUST)
-        fprintf(out, "    recommended: --accuracy robust. Below %.0f ulps the offset no longer "
-                     "clears the rounding of hit points, so secondary rays can hit the surface "
-                     "they leave; robust offsets scale with the coordinates instead\n",
-                LANES_PLAN_MIN_EPSILON_ULPS);
+    fprintf(out, "    coordinates reach %.6g, bounding-box diagonal %.6g, longest edge %.6g: the "
+                 "fast/default offset %.3g is %.3g ulps of the largest coordinate; robust mode's "
+                 "error bound moves a hit point up to %.3g\n",
+            p->extent, p->diagonal, p->longest_edge, p->epsilon, p->epsilon_ulps, p->offset_bound);
+    lanes_error err;
+    if (lanes_scene_plan_check(p, &err) != LANES_OK)
+        fprintf(out, "    refused: %s\n", err.message);
+    else if (p->recommend_robust && p->accuracy != LANES_ACCURACY_ROBUST)
+        fprintf(out, "    recommended: --accuracy robust. The fixed offset is below that bound, so "
+                     "secondary rays can hit the surface they leave; robust offsets scale with the "
+                     "coordinates instead\n");
     else if (p->recommend_robust)
-        fprintf(out, "    robust, as recommended: the fixed offset would be below %.0f ulps\n",
-                LANES_PLAN_MIN_EPSILON_ULPS);
+        fprintf(out, "    robust, as recommended: the fixed offset would be below that bound\n");
     else
-        fprintf(out, "    the fixed offset is at least %.0f ulps: fast and default modes are safe "
-                     "from self-intersection here\n",
-                LANES_PLAN_MIN_EPSILON_ULPS);
+        fprintf(out, "    the fixed offset exceeds that bound: fast and default modes are safe "
+                     "from self-intersection here\n");
+}
+
+lanes_status lanes_scene_plan_check(const lanes_scene_plan *p, lanes_error *err)
+{
+    if (!p->has_vertices) return LANES_OK;
+    const char *mode = lanes_accuracy_name(p->accuracy);
+    if (p->accuracy == LANES_ACCURACY_ROBUST) {
+        if (p->diagonal < LANES_PLAN_ROBUST_MIN_DIAGONAL)
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "the scene's diagonal %.3g is below the %.0e robust mode can trace "
+                                   "(its triangle test multiplies two distances: float underflows)",
+                                   p->diagonal, LANES_PLAN_ROBUST_MIN_DIAGONAL);
+        if (p->reach > LANES_PLAN_ROBUST_MAX_REACH)
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "the scene with its camera spans %.3g, beyond the %.0e robust mode "
+                                   "can trace (its triangle test multiplies two distances: float "
+                                   "overflows)",
+                                   p->reach, LANES_PLAN_ROBUST_MAX_REACH);
+        return LANES_OK;
+    }
+    if (p->diagonal < LANES_PLAN_MOLLER_MIN_DIAGONAL)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "the scene's diagonal %.3g is below the %.0e %s mode can trace (its "
+                               "triangle test multiplies a distance and two edges: float underflows); "
+                               "robust mode traces it down to %.0e",
+                               p->diagonal, LANES_PLAN_MOLLER_MIN_DIAGONAL, mode,
+                               LANES_PLAN_ROBUST_MIN_DIAGONAL);
+    if (6.0 * p->reach * p->longest_edge * p->longest_edge > FLT_MAX)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "the scene is too large for %s mode: its triangle test multiplies a "
+                               "distance (up to %.3g with the camera) and two edges (up to %.3g), "
+                               "6 times which, %.3g, overflows float (%.3g); robust mode traces "
+                               "distances up to %.0e",
+                               mode, p->reach, p->longest_edge,
+                               6.0 * p->reach * p->longest_edge * p->longest_edge, (double)FLT_MAX,
+                               LANES_PLAN_ROBUST_MAX_REACH);
+    return LANES_OK;
 }

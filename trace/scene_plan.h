@@ -29,26 +29,55 @@ typedef struct lanes_scene_plan {
     /* accuracy */
     lanes_accuracy accuracy;
     const char *accuracy_from;  /* "--accuracy", "the scene file", "the default" */
+    bool has_vertices;          /* some vertex is finite (else the sizes are 0) */
     double extent;              /* largest |coordinate| of any vertex */
     double diagonal;            /* of the scene's bounding box */
+    double reach;               /* diagonal of the box of the vertices and the camera's eye:
+                                   the longest distance a triangle test meets */
+    double longest_edge;        /* of any triangle */
     double epsilon;             /* secondary-ray offset of fast and default modes */
     double epsilon_ulps;        /* epsilon in ulps of the largest coordinate */
-    bool recommend_robust;      /* epsilon_ulps < LANES_PLAN_MIN_EPSILON_ULPS */
+    double offset_bound;        /* the largest offset robust mode gives a hit point here */
+    bool recommend_robust;      /* epsilon < offset_bound */
 } lanes_scene_plan;
 
-/* A hit point rebuilt from barycentrics, v0 + u e1 + v e2, carries about
- * three roundings of its largest coordinate, and the triangle test's t a few
- * more: an offset below 16 ulps of the scene's largest coordinate no longer
- * clears that error everywhere, and secondary rays start to hit the surface
- * they leave (see `lanes accuracy`, column self_hits, for the measured
- * rates as a mesh moves away from the origin). With the default epsilon
- * (1e-5 of the diagonal) that happens when coordinates exceed about 5 times
- * the scene's diagonal (1e-5 * 2^23 / 16). */
-#define LANES_PLAN_MIN_EPSILON_ULPS 16.0
+/* When the fixed offset of fast and default modes is safe: robust mode
+ * moves a secondary origin out of the rounding-error box of its hit point
+ * (lanes_offset_origin, trace/shading.h), and that box grows with the
+ * coordinates. offset_bound is the offset it would give the worst point of
+ * the scene: twice the box's diagonal, a coordinate as large as `extent`
+ * (unit roundoff u of it) with gamma(3) of the longest edge, plus the one
+ * float it steps out on each axis. Fast and default modes are safe when
+ * their epsilon is at least that; below it they are recommended robust.
+ * With 1e-5 of the diagonal as epsilon the verdict turns at coordinates of
+ * 25 to 30 diagonals (1e-5 / (4 sqrt(3) u) to 1e-5 / (5.2 u)). On the
+ * mirror-box scene of tests/test_scale_sweep.c it turns at 26 diagonals;
+ * default mode still renders right at 87 and first fails at 261. */
+
+/* The sizes each mode's arithmetic holds (uniform scale or distance, not
+ * position: triangle tests subtract the ray origin first).
+ * - Fast and default (Möller-Trumbore): t's numerator is a product of a
+ *   distance and two edges, at most 6 reach * longest_edge^2, which must not
+ *   overflow float (3.4e38); and det, a product of two edges, and that
+ *   numerator must stay normal floats (above 1.2e-38) for the scene's own
+ *   size: its diagonal at least 1e-11 (the sweep loses most shadows at a
+ *   diagonal of 1e-13 and renders right at 1e-12).
+ * - Robust (watertight): products of two distances only, divided before
+ *   the third factor: reach up to 1e18 (its square 1e36) and a diagonal
+ *   from 1e-15 (right at 1e-16, shadows lost at 1e-17).
+ * Outside them lanes_scene_plan_check refuses the scene. */
+#define LANES_PLAN_MOLLER_MIN_DIAGONAL 1e-11
+#define LANES_PLAN_ROBUST_MIN_DIAGONAL 1e-15
+#define LANES_PLAN_ROBUST_MAX_REACH 1e18
 
 /* requested: the --accuracy / API choice, or -1 to take the scene file's
  * (scene->accuracy), or else LANES_ACCURACY_DEFAULT. */
 void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_plan *plan);
+
+/* LANES_ERR_BAD_INPUT, with a message naming the size and the limit, when
+ * the plan's accuracy mode cannot trace the scene at its size (see the
+ * limits above); LANES_OK for a scene without a finite vertex. */
+lanes_status lanes_scene_plan_check(const lanes_scene_plan *plan, lanes_error *err);
 
 /* Prints what was switched on and off, and why. */
 void lanes_scene_plan_explain(const lanes_scene_plan *plan, FILE *out);

@@ -202,16 +202,6 @@ static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weig
     return 2;
 }
 
-/* How far secondary origins are pushed off their surface in fast and
- * default modes: a fixed fraction of the scene's size (see accuracy.h). */
-static inline float lanes_scene_epsilon(const lanes_scene *s)
-{
-    float lo[3], hi[3];
-    lanes_scene_bounds(s, lo, hi);
-    vec3 diag = v3_sub(v3_load(hi), v3_load(lo));
-    return 1e-5f * sqrtf(v3_dot(diag, diag)) + 1e-6f;
-}
-
 /* The most shadow rays one diffuse hit makes. */
 static inline int lanes_max_shadow_rays(const lanes_scene *s, int area_samples)
 {
