@@ -42,6 +42,9 @@ static inline v16i v16i_loadu(const int32_t *p) { return _mm512_loadu_si512((con
 static inline void v16i_store(int32_t *p, v16i v) { _mm512_store_si512((void *)p, v); }
 static inline void v16i_storeu(int32_t *p, v16i v) { _mm512_storeu_si512((void *)p, v); }
 static inline void v16i_store_masked(int32_t *p, v16m m, v16i v) { _mm512_mask_storeu_epi32(p, m, v); }
+/* An opmask store is a plain store with a mask: no read needed. */
+static inline void v16f_store_merge(float *p, v16m m, v16f v) { _mm512_mask_storeu_ps(p, m, v); }
+static inline void v16i_store_merge(int32_t *p, v16m m, v16i v) { _mm512_mask_storeu_epi32(p, m, v); }
 static inline v16f v16f_gather(const float *base, v16i idx) { return _mm512_i32gather_ps(idx, base, 4); }
 static inline v16i v16i_gather(const int32_t *base, v16i idx)
 {

@@ -64,6 +64,16 @@ static inline void v16i_store_masked(int32_t *p, v16m m, v16i v)
     v8i_store_masked(p, m.lo, v.lo);
     v8i_store_masked(p + 8, m.hi, v.hi);
 }
+static inline void v16f_store_merge(float *p, v16m m, v16f v)
+{
+    v8f_store_merge(p, m.lo, v.lo);
+    v8f_store_merge(p + 8, m.hi, v.hi);
+}
+static inline void v16i_store_merge(int32_t *p, v16m m, v16i v)
+{
+    v8i_store_merge(p, m.lo, v.lo);
+    v8i_store_merge(p + 8, m.hi, v.hi);
+}
 static inline v16f v16f_gather(const float *base, v16i idx)
 {
     return (v16f){v8f_gather(base, idx.lo), v8f_gather(base, idx.hi)};

@@ -10,6 +10,11 @@
  * - Compares are ordered (false on NaN) except neq, which is true on NaN.
  * - Masked loads read 0 in inactive lanes and touch no memory there; masked
  *   stores and compress stores write active lanes only.
+ * - store_merge(p, m, v) leaves p[i] = m[i] ? v[i] : p[i] for all W
+ *   elements, and may do it by reading and rewriting every one of them:
+ *   each must lie in bounds and be written by no other thread meanwhile.
+ *   Where a masked store is slow (AMD before Zen 4) it is a load, a blend
+ *   and a store; with opmasks it is the masked store.
  * - Mask bits: lane i is bit i. */
 #ifndef LANES_SIMD_VEC1_SCALAR_H
 #define LANES_SIMD_VEC1_SCALAR_H
@@ -46,6 +51,8 @@ static inline v1i v1i_loadu(const int32_t *p) { return *p; }
 static inline void v1i_store(int32_t *p, v1i v) { *p = v; }
 static inline void v1i_storeu(int32_t *p, v1i v) { *p = v; }
 static inline void v1i_store_masked(int32_t *p, v1m m, v1i v) { if (m) *p = v; }
+static inline void v1f_store_merge(float *p, v1m m, v1f v) { if (m) *p = v; }
+static inline void v1i_store_merge(int32_t *p, v1m m, v1i v) { if (m) *p = v; }
 static inline v1f v1f_gather(const float *base, v1i idx) { return base[idx]; }
 static inline v1i v1i_gather(const int32_t *base, v1i idx) { return base[idx]; }
 static inline int v1f_compress_store(float *dst, v1m m, v1f v)

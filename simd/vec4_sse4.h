@@ -73,6 +73,17 @@ static inline void v4i_store_masked(int32_t *p, v4m m, v4i v)
     for (int i = 0; i < 4; i++)
         if (bits & (1u << i)) p[i] = tmp[i];
 }
+/* SSE has no masked store but the non-temporal MASKMOVDQU: a blend of
+ * what is there is one load and one blend more than a plain store. */
+static inline void v4f_store_merge(float *p, v4m m, v4f v)
+{
+    _mm_storeu_ps(p, _mm_blendv_ps(_mm_loadu_ps(p), v, m));
+}
+static inline void v4i_store_merge(int32_t *p, v4m m, v4i v)
+{
+    __m128i old = _mm_loadu_si128((const __m128i *)(const void *)p);
+    _mm_storeu_si128((__m128i *)(void *)p, _mm_blendv_epi8(old, v, _mm_castps_si128(m)));
+}
 static inline v4f v4f_gather(const float *base, v4i idx)
 {
     return _mm_setr_ps(base[_mm_cvtsi128_si32(idx)], base[_mm_extract_epi32(idx, 1)],

@@ -26,6 +26,9 @@ static inline uint32_t v8m_bits(v8m a) { return (uint32_t)a; }
 static inline v8f v8f_load_masked(v8m m, const float *p) { return _mm256_maskz_loadu_ps(m, p); }
 static inline void v8f_store_masked(float *p, v8m m, v8f v) { _mm256_mask_storeu_ps(p, m, v); }
 static inline void v8i_store_masked(int32_t *p, v8m m, v8i v) { _mm256_mask_storeu_epi32(p, m, v); }
+/* An opmask store is a plain store with a mask: no read needed. */
+static inline void v8f_store_merge(float *p, v8m m, v8f v) { _mm256_mask_storeu_ps(p, m, v); }
+static inline void v8i_store_merge(int32_t *p, v8m m, v8i v) { _mm256_mask_storeu_epi32(p, m, v); }
 /* Compress in a register, then a masked store of the first n lanes (the
  * memory form of VCOMPRESSPS is microcoded on several cores). */
 static inline int v8i_compress_store(int32_t *dst, v8m m, v8i v)

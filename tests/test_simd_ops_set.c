@@ -184,7 +184,7 @@ static void test_load_store(simd_ctx *c, rng *r)
 
 static void test_masked(simd_ctx *c, rng *r)
 {
-    simd_begin(c, "load_masked/store_masked");
+    simd_begin(c, "load_masked/store_masked/store_merge");
     float a[W], b[W + 16];
     int32_t ib[W + 16], ia[W];
     for (size_t mi = 0; mi < mask_count(); mi++) {
@@ -208,6 +208,25 @@ static void test_masked(simd_ctx *c, rng *r)
                 simd_fail(c, "vf_store_masked(mask 0x%x) element %d = 0x%08x, expected 0x%08x", bits, i, fbits(b[i]), want);
             int32_t iw = on ? ia[i] : 0x5eed;
             if (ib[i] != iw) simd_fail(c, "vi_store_masked(mask 0x%x) element %d = %d, expected %d", bits, i, ib[i], iw);
+        }
+        /* store_merge: the same result on its W elements, and the last of
+         * them may be the last of a page */
+        float *fp = c->page_end - W;
+        int32_t *ip = (int32_t *)(void *)(c->page_end - W);
+        float fold[W];
+        int32_t iold[W];
+        for (int i = 0; i < W; i++) fold[i] = fp[i] = rand_float(r);
+        vf_store_merge(fp, m, vload(a));
+        for (int i = 0; i < W; i++) {
+            uint32_t want = (bits >> i) & 1 ? fbits(a[i]) : fbits(fold[i]);
+            if (fbits(fp[i]) != want)
+                simd_fail(c, "vf_store_merge(mask 0x%x) element %d = 0x%08x, expected 0x%08x", bits, i, fbits(fp[i]), want);
+        }
+        for (int i = 0; i < W; i++) iold[i] = ip[i] = (int32_t)next(r);
+        vi_store_merge(ip, m, iload(ia));
+        for (int i = 0; i < W; i++) {
+            int32_t want = (bits >> i) & 1 ? ia[i] : iold[i];
+            if (ip[i] != want) simd_fail(c, "vi_store_merge(mask 0x%x) element %d = %d, expected %d", bits, i, ip[i], want);
         }
     }
     /* inactive lanes past the end of a page: no access at all (a fault

@@ -24,7 +24,7 @@ LANES_BODY size_t box_packet_body(const lanes_rays *rays, const uint32_t *idx, s
         vmask m = box_vs_rays(&r, box, &entry, 1.0f);
         LANES_COUNT(stats, r.live);
         lanes_put_bits(hit, i, m);
-        if (tentry) vf_store_masked(tentry + i, m, entry);
+        if (tentry) lanes_store_hits(tentry, i, n, m, entry);
         hits += (size_t)vm_popcount(m);
     }
     return hits;
@@ -88,7 +88,7 @@ LANES_BODY size_t box_wide_body(const lanes_ray *ray, const lanes_boxes *boxes, 
         vmask m = vm_and(vm_and(vf_le(tin, tout), live), nonempty);
         LANES_COUNT(stats, live);
         lanes_put_bits(hit, i, m);
-        if (tentry) vf_store_masked(tentry + i, m, tin);
+        if (tentry) lanes_store_hits(tentry, i, n, m, tin);
         hits += (size_t)vm_popcount(m);
     }
     return hits;

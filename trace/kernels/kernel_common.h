@@ -41,6 +41,26 @@ static inline void lanes_put_bits(uint32_t *mask, size_t i, vmask m)
         mask[i / 32] |= bits << (i % 32);
 }
 
+/* Writes v into the lanes of m of p[i .. i+LANES_W) for an array of n
+ * elements the caller gave this call alone (kernels.h: results past n are
+ * never written). A whole vector below n is merged (a read, a blend and a
+ * write, where a masked store is slow: see simd/vec1_scalar.h); the tail
+ * past n takes the masked store, which touches nothing beyond it. */
+static inline void lanes_store_hits(float *p, size_t i, size_t n, vmask m, vfloat v)
+{
+    if (n - i >= LANES_W)
+        vf_store_merge(p + i, m, v);
+    else
+        vf_store_masked(p + i, m, v);
+}
+static inline void lanes_store_hits_i(int32_t *p, size_t i, size_t n, vmask m, vint v)
+{
+    if (n - i >= LANES_W)
+        vi_store_merge(p + i, m, v);
+    else
+        vi_store_masked(p + i, m, v);
+}
+
 /* Ray data of one vector iteration, by position (idx == NULL) or through an
  * index array. Past n, lanes repeat the first ray of the iteration: it is
  * valid data, and `live` masks the lanes out. */

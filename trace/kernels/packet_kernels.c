@@ -148,7 +148,7 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
             size_t at = (size_t)g * LANES_W;
             if (opt->occlusion) {
                 uint32_t bits = vm_bits(h.hit);
-                vf_store_masked(rays->tfar + at, h.hit, vf_set1(-INFINITY));
+                lanes_store_hits(rays->tfar, at, rays->count, h.hit, vf_set1(-INFINITY));
                 masks[g] &= (uint16_t)~bits;
                 while (bits) {
                     occluded[at + (size_t)__builtin_ctz(bits)] = 1;
@@ -162,10 +162,10 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
                 vmask first = vm_not(vm_from_bits(s->found[g]));
                 vmask nearer = vm_and(h.hit, vm_or(first, vf_lt(h.t, vf_load(rays->tfar + at))));
                 s->found[g] |= (uint16_t)vm_bits(nearer);
-                vf_store_masked(rays->tfar + at, nearer, h.t);
-                vf_store_masked(u + at, nearer, h.u);
-                vf_store_masked(v + at, nearer, h.v);
-                vi_store_masked((int32_t *)(void *)(prim + at), nearer, prim_id);
+                lanes_store_hits(rays->tfar, at, rays->count, nearer, h.t);
+                lanes_store_hits(u, at, rays->count, nearer, h.u);
+                lanes_store_hits(v, at, rays->count, nearer, h.v);
+                lanes_store_hits_i((int32_t *)(void *)prim, at, rays->count, nearer, prim_id);
             }
         }
     }

@@ -32,16 +32,15 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
         } else {
             rdx = vf_rcp(dx), rdy = vf_rcp(dy), rdz = vf_rcp(dz);
         }
-        vf_store_masked(r->rdx + i, live, rdx);
-        vf_store_masked(r->rdy + i, live, rdy);
-        vf_store_masked(r->rdz + i, live, rdz);
         /* Infinite ends become ±FLT_MAX: a slab that a d = ±0 ray never
          * enters has both distances at the same infinity, and only finite
          * ends keep such an empty interval from overlapping [tnear, tfar]. */
-        vf_store_masked(r->tnear + i, live, vf_max(tnear, vf_set1(-FLT_MAX)));
-        vf_store_masked(r->tfar + i, live, vf_min(tfar, vf_set1(FLT_MAX)));
-        vmask dead = vm_andnot(live, ok);
-        vf_store_masked(r->tnear + i, dead, vf_set1(INFINITY));
-        vf_store_masked(r->tfar + i, dead, vf_set1(-INFINITY));
+        vfloat tn = vf_select(ok, vf_max(tnear, vf_set1(-FLT_MAX)), vf_set1(INFINITY));
+        vfloat tf = vf_select(ok, vf_min(tfar, vf_set1(FLT_MAX)), vf_set1(-INFINITY));
+        lanes_store_hits(r->rdx, i, r->count, live, rdx);
+        lanes_store_hits(r->rdy, i, r->count, live, rdy);
+        lanes_store_hits(r->rdz, i, r->count, live, rdz);
+        lanes_store_hits(r->tnear, i, r->count, live, tn);
+        lanes_store_hits(r->tfar, i, r->count, live, tf);
     }
 }

@@ -16,9 +16,9 @@ LANES_BODY size_t tri_packet_body(lanes_tri_algo algo, const lanes_rays *rays, c
         LANES_COUNT(stats, r.live);
         lanes_put_bits(hit, i, h.hit);
         if (out) {
-            vf_store_masked(out->t + i, h.hit, h.t);
-            vf_store_masked(out->u + i, h.hit, h.u);
-            vf_store_masked(out->v + i, h.hit, h.v);
+            lanes_store_hits(out->t, i, n, h.hit, h.t);
+            lanes_store_hits(out->u, i, n, h.hit, h.u);
+            lanes_store_hits(out->v, i, n, h.hit, h.v);
         }
         hits += (size_t)vm_popcount(h.hit);
     }
@@ -38,9 +38,9 @@ LANES_BODY size_t tri_wide_body(lanes_tri_algo algo, const lanes_ray *ray,
         LANES_COUNT(stats, live);
         lanes_put_bits(hit, i, h.hit);
         if (out) {
-            vf_store_masked(out->t + i, h.hit, h.t);
-            vf_store_masked(out->u + i, h.hit, h.u);
-            vf_store_masked(out->v + i, h.hit, h.v);
+            lanes_store_hits(out->t, i, n, h.hit, h.t);
+            lanes_store_hits(out->u, i, n, h.hit, h.u);
+            lanes_store_hits(out->v, i, n, h.hit, h.v);
         }
         hits += (size_t)vm_popcount(h.hit);
     }
