@@ -13,8 +13,9 @@
  * - store_merge(p, m, v) leaves p[i] = m[i] ? v[i] : p[i] for all W
  *   elements, and may do it by reading and rewriting every one of them:
  *   each must lie in bounds and be written by no other thread meanwhile.
- *   Where a masked store is slow (AMD before Zen 4) it is a load, a blend
- *   and a store; with opmasks it is the masked store.
+ *   With vector masks (sse4, avx, avx2) it is a load, a blend and a
+ *   store, cheaper than a masked store on AMD Zen 3 (vec8_avx.h); with
+ *   opmasks it is the masked store.
  * - Mask bits: lane i is bit i. */
 #ifndef LANES_SIMD_VEC1_SCALAR_H
 #define LANES_SIMD_VEC1_SCALAR_H

@@ -73,8 +73,8 @@ static inline void v4i_store_masked(int32_t *p, v4m m, v4i v)
     for (int i = 0; i < 4; i++)
         if (bits & (1u << i)) p[i] = tmp[i];
 }
-/* SSE has no masked store but the non-temporal MASKMOVDQU: a blend of
- * what is there is one load and one blend more than a plain store. */
+/* SSE's only masked store is the non-temporal MASKMOVDQU; a load, a blend
+ * and a store replace store_masked's lane-by-lane loop. */
 static inline void v4f_store_merge(float *p, v4m m, v4f v)
 {
     _mm_storeu_ps(p, _mm_blendv_ps(_mm_loadu_ps(p), v, m));

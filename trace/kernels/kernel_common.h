@@ -45,7 +45,8 @@ static inline void lanes_put_bits(uint32_t *mask, size_t i, vmask m)
  * elements the caller gave this call alone (kernels.h: results past n are
  * never written). A whole vector below n is merged (a read, a blend and a
  * write, where a masked store is slow: see simd/vec1_scalar.h); the tail
- * past n takes the masked store, which touches nothing beyond it. */
+ * past n takes the masked store, which touches nothing beyond it. Integer
+ * results go through vi_as_vf: the store moves bits, not values. */
 static inline void lanes_store_hits(float *p, size_t i, size_t n, vmask m, vfloat v)
 {
     if (n - i >= LANES_W)
@@ -53,12 +54,15 @@ static inline void lanes_store_hits(float *p, size_t i, size_t n, vmask m, vfloa
     else
         vf_store_masked(p + i, m, v);
 }
-static inline void lanes_store_hits_i(int32_t *p, size_t i, size_t n, vmask m, vint v)
+
+/* Writes every lane of v that lies below n to p[i ..]: a plain store for a
+ * whole vector, a masked one for the tail. */
+static inline void lanes_store_below(float *p, size_t i, size_t n, vfloat v)
 {
     if (n - i >= LANES_W)
-        vi_store_merge(p + i, m, v);
+        vf_storeu(p + i, v);
     else
-        vi_store_masked(p + i, m, v);
+        vf_store_masked(p + i, vm_first_n(n - i), v);
 }
 
 /* Ray data of one vector iteration, by position (idx == NULL) or through an

@@ -165,7 +165,7 @@ LANES_BODY void packet_leaf(const lanes_bvh2 *b, const lanes_bvh2_node *nd,
                 lanes_store_hits(rays->tfar, at, rays->count, nearer, h.t);
                 lanes_store_hits(u, at, rays->count, nearer, h.u);
                 lanes_store_hits(v, at, rays->count, nearer, h.v);
-                lanes_store_hits_i((int32_t *)(void *)prim, at, rays->count, nearer, prim_id);
+                lanes_store_hits((float *)(void *)prim, at, rays->count, nearer, vi_as_vf(prim_id));
             }
         }
     }

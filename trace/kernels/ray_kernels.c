@@ -12,7 +12,6 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
 {
     const vfloat zero = vf_zero();
     for (size_t i = 0; i < r->count; i += LANES_W) {
-        vmask live = vm_first_n(r->count - i);
         vfloat dx = vf_load(r->dx + i), dy = vf_load(r->dy + i), dz = vf_load(r->dz + i);
         vfloat tnear = vf_load(r->tnear + i), tfar = vf_load(r->tfar + i);
         vmask ok = vm_and(finite(vf_load(r->ox + i)),
@@ -37,10 +36,10 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
          * ends keep such an empty interval from overlapping [tnear, tfar]. */
         vfloat tn = vf_select(ok, vf_max(tnear, vf_set1(-FLT_MAX)), vf_set1(INFINITY));
         vfloat tf = vf_select(ok, vf_min(tfar, vf_set1(FLT_MAX)), vf_set1(-INFINITY));
-        lanes_store_hits(r->rdx, i, r->count, live, rdx);
-        lanes_store_hits(r->rdy, i, r->count, live, rdy);
-        lanes_store_hits(r->rdz, i, r->count, live, rdz);
-        lanes_store_hits(r->tnear, i, r->count, live, tn);
-        lanes_store_hits(r->tfar, i, r->count, live, tf);
+        lanes_store_below(r->rdx, i, r->count, rdx);
+        lanes_store_below(r->rdy, i, r->count, rdy);
+        lanes_store_below(r->rdz, i, r->count, rdz);
+        lanes_store_below(r->tnear, i, r->count, tn);
+        lanes_store_below(r->tfar, i, r->count, tf);
     }
 }
