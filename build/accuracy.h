@@ -40,6 +40,8 @@
 #ifndef LANES_BUILD_ACCURACY_H
 #define LANES_BUILD_ACCURACY_H
 
+#include <float.h>
+#include <math.h>
 #include <string.h>
 
 typedef enum lanes_accuracy {
@@ -66,6 +68,41 @@ static inline int lanes_accuracy_from_name(const char *name)
     for (int i = 0; name && i < LANES_ACCURACY_COUNT; i++)
         if (strcmp(name, lanes_accuracy_name((lanes_accuracy)i)) == 0) return i;
     return -1;
+}
+
+/* The sizes each mode's float arithmetic holds (uniform scale or distance,
+ * not position: triangle tests subtract the ray origin first). The reach is
+ * the longest distance a triangle test meets, from a ray's origin to a
+ * vertex: at most the diagonal of the box of the scene and the origin.
+ * - Fast and default (Möller-Trumbore): t's numerator is a product of a
+ *   distance and two edges, at most 6 reach * longest_edge^2, which must not
+ *   overflow float (3.4e38); and det, a product of two edges, and that
+ *   numerator must stay normal floats (above 1.2e-38) for the scene's own
+ *   size: its diagonal at least 1e-11 (the scale sweep of
+ *   tests/test_scale_sweep.c loses most shadows at a diagonal of 1e-13 and
+ *   renders right at 1e-12).
+ * - Robust (watertight): products of two distances only, divided before
+ *   the third factor: reach up to 1e18 (its square 1e36) and a diagonal
+ *   from 1e-15 (right at 1e-16, shadows lost at 1e-17).
+ * Outside them the renderers refuse the scene (lanes_scene_plan_check,
+ * trace/scene_plan.h), the library refuses to build an accel, and a query
+ * reports a ray that starts too far away (trace/lanes_api.c). */
+#define LANES_MOLLER_MIN_DIAGONAL 1e-11
+#define LANES_ROBUST_MIN_DIAGONAL 1e-15
+#define LANES_ROBUST_MAX_REACH 1e18
+
+static inline double lanes_accuracy_min_diagonal(lanes_accuracy a)
+{
+    return a == LANES_ACCURACY_ROBUST ? LANES_ROBUST_MIN_DIAGONAL : LANES_MOLLER_MIN_DIAGONAL;
+}
+
+/* The longest reach mode a traces for triangles whose longest edge is
+ * longest_edge (infinite when every triangle is a point). */
+static inline double lanes_accuracy_max_reach(lanes_accuracy a, double longest_edge)
+{
+    if (a == LANES_ACCURACY_ROBUST) return LANES_ROBUST_MAX_REACH;
+    double e2 = longest_edge * longest_edge;
+    return e2 > 0.0 ? (double)FLT_MAX / (6.0 * e2) : INFINITY;
 }
 
 #endif

@@ -3,7 +3,8 @@
  * error (status, message, callback), accels from arrays, the three query
  * forms against a brute-force double-precision reference and against each
  * other at every instruction set this CPU runs and every accuracy mode,
- * invalid rays, packets of any size, and concurrent queries of one accel.
+ * invalid rays, packets of any size, the sizes each accuracy mode traces
+ * or refuses, and concurrent queries of one accel.
  *
  *   test_api [--expect-refused SET]   (SET must be refused as the CPU lacking it)
  */
@@ -559,6 +560,113 @@ static void test_threads(const mesh *m)
     free_rays(&rays);
 }
 
+/* ------------------------------------------------------- scale limits */
+
+/* One triangle in z = 0 spanning [-size, size]^2 (longest edge sqrt(5) size,
+ * bounding-box diagonal 2 sqrt(2) size) on a device of the given config. */
+static lanes_status triangle_accel(const char *config, float size, lanes_device *d, lanes_accel *a)
+{
+    float v[9] = {-size, -size, 0, size, -size, 0, 0, size, 0};
+    uint32_t idx[3] = {0, 1, 2};
+    *a = NULL;
+    lanes_status st = lanes_device_create(config, d);
+    if (st != LANES_OK) return st;
+    return lanes_accel_create(*d, v, 3, idx, 1, a);
+}
+
+/* A ray straight down onto the triangle from height h: a hit at t = h. */
+static lanes_status shoot_down(lanes_accel a, float h, lanes_hit1 *hit, lanes_status *stream_status)
+{
+    lanes_ray1 r = {{0.0f, 0.0f, h}, {0.0f, 0.0f, -1.0f}, 0.0f, INFINITY};
+    lanes_status st = lanes_intersect1(a, &r, hit);
+    /* the same ray in a stream of three, behind two that hit */
+    float ox[3] = {0, 0, 0}, oz[3] = {1, 1, h}, dz[3] = {-1, -1, -1}, tn[3] = {0, 0, 0},
+          tf[3] = {INFINITY, INFINITY, INFINITY}, t[3];
+    uint32_t prim[3];
+    lanes_rays_soa s = {ox, ox, oz, ox, ox, dz, tn, tf};
+    lanes_hits_soa hs = {t, NULL, NULL, prim};
+    *stream_status = lanes_intersect_stream(a, &s, 3, &hs);
+    CHECK(prim[0] == 0 && prim[1] == 0 && prim[2] == hit->prim_id && t[2] == hit->t,
+          "stream: rays beside the one from %g lost (prims %u %u), or it differs from the "
+          "single ray (%u at %g against %u at %g)",
+          (double)h, prim[0], prim[1], prim[2], (double)t[2], hit->prim_id, (double)hit->t);
+    return st;
+}
+
+/* Every accuracy mode's float arithmetic holds a range of sizes (the
+ * limits of build/accuracy.h): inside it, at every set, the answer is
+ * right; outside it the accel or the ray is refused by name, never lost in
+ * silence. The limits are computed here from the mode, not read back. */
+static void test_scale_limits(void)
+{
+    int sets_run = 0;
+    for (int s = 0; s < LANES_ISA_COUNT; s++) {
+        const char *set_name = lanes_isa_name((lanes_isa)s);
+        if (!lanes_isa_supported((lanes_isa)s)) continue;
+        sets_run++;
+        for (size_t md = 0; md < 3; md++) {
+            const bool robust = md == 2;
+            char config[96];
+            snprintf(config, sizeof config, "isa=%s,accuracy=%s", set_name, modes[md]);
+            lanes_device d;
+            lanes_accel a;
+
+            /* far rays: triangles of 1e10, default reach FLT_MAX / (6 * 5e20) */
+            const float size = 1e10f;
+            const double edge = sqrt(5.0) * size;
+            const double reach = robust ? 1e18 : 3.4028234663852886e38 / (6.0 * edge * edge);
+            lanes_status st = triangle_accel(config, size, &d, &a);
+            CHECK(st == LANES_OK, "%s: accel of size %g: %s", config, (double)size, lanes_last_error_message());
+            if (st == LANES_OK) {
+                lanes_accel_info ai;
+                lanes_accel_get_info(a, &ai);
+                CHECK(fabs(ai.max_reach - reach) <= 1e-6 * reach, "%s: max_reach %g, want %g", config,
+                      ai.max_reach, reach);
+                lanes_hit1 hit;
+                lanes_status ss;
+                const float near = (float)(0.9 * reach), far = (float)(1.1 * reach);
+                st = shoot_down(a, near, &hit, &ss);
+                CHECK(st == LANES_OK && ss == LANES_OK && hit.prim_id == 0 &&
+                          fabs(hit.t - near) <= 1e-6 * near,
+                      "%s: ray from %g: %s, prim %u at t %g: %s", config, (double)near,
+                      lanes_status_name(st), hit.prim_id, (double)hit.t, lanes_last_error_message());
+                st = shoot_down(a, far, &hit, &ss);
+                expect_error(st, LANES_ERR_BAD_INPUT, "too far from the mesh", config);
+                expect_error(ss, LANES_ERR_BAD_INPUT, "ray 2 reaches", config);
+                CHECK(hit.prim_id == LANES_INVALID_ID && isinf(hit.t), "%s: refused ray from %g: prim %u t %g",
+                      config, (double)far, hit.prim_id, (double)hit.t);
+            }
+            lanes_accel_release(a);
+            lanes_device_release(d);
+
+            /* small meshes: a diagonal of 1.5 times the limit traces, of 0.5 is refused */
+            const double min_diagonal = robust ? 1e-15 : 1e-11;
+            for (int k = 0; k < 2; k++) {
+                const double diagonal = (k ? 0.5 : 1.5) * min_diagonal;
+                const float tiny = (float)(diagonal / (2.0 * sqrt(2.0)));
+                st = triangle_accel(config, tiny, &d, &a);
+                if (k) {
+                    expect_error(st, LANES_ERR_BAD_INPUT, "diagonal", config);
+                    CHECK(a == NULL, "%s: accel not NULL on error", config);
+                } else {
+                    CHECK(st == LANES_OK, "%s: mesh of diagonal %g: %s", config, diagonal,
+                          lanes_last_error_message());
+                    lanes_hit1 hit;
+                    lanes_status ss;
+                    const float h = 4.0f * tiny;
+                    if (st == LANES_OK) st = shoot_down(a, h, &hit, &ss);
+                    CHECK(st == LANES_OK && hit.prim_id == 0 && fabs(hit.t - h) <= 1e-6 * h,
+                          "%s: diagonal %g, ray from %g: prim %u t %g", config, diagonal, (double)h,
+                          hit.prim_id, (double)hit.t);
+                }
+                lanes_accel_release(a);
+                lanes_device_release(d);
+            }
+        }
+    }
+    CHECK(sets_run >= 1, "no instruction set ran");
+}
+
 int main(int argc, char **argv)
 {
     const char *expect_refused = NULL;
@@ -569,6 +677,7 @@ int main(int argc, char **argv)
     test_devices(expect_refused);
     test_argument_errors(&m);
     test_queries(&m);
+    test_scale_limits();
     test_threads(&m);
     free(m.v);
     free(m.idx);

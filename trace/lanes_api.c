@@ -37,6 +37,9 @@ struct lanes_accel_impl {
     lanes_wbvh wide;
     size_t triangles, skipped;
     float bounds_min[3], bounds_max[3];
+    /* The longest distance from a ray's origin across the scene that the
+     * device's accuracy mode traces (lanes_accuracy_max_reach). */
+    double max_reach;
 };
 
 LANES_API const char *lanes_version(void)
@@ -248,6 +251,7 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
                     triangle_count);
     }
     size_t finite = 0;
+    double edge2 = 0.0;
     for (size_t t = 0; t < triangle_count; t++) {
         float *v = scene.verts + 9 * t;
         for (int c = 0; c < 3; c++)
@@ -255,6 +259,11 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
         bool ok = true;
         for (int k = 0; k < 9; k++) ok = ok && isfinite(v[k]);
         finite += ok;
+        for (int k = 0; ok && k < 3; k++) {
+            const float *p = v + 3 * k, *q = v + 3 * ((k + 1) % 3);
+            double dx = (double)q[0] - p[0], dy = (double)q[1] - p[1], dz = (double)q[2] - p[2];
+            edge2 = fmax(edge2, dx * dx + dy * dy + dz * dz);
+        }
     }
     scene.triangle_count = triangle_count;
     if (finite == 0) {
@@ -262,12 +271,30 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
         free(scene.verts);
         return fail(device, LANES_ERR_BAD_INPUT, "%s: no triangle has finite coordinates", fn);
     }
+    lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
+    double diag2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double e = (double)a->bounds_max[k] - a->bounds_min[k];
+        diag2 += e * e;
+    }
+    const lanes_accuracy mode = device->accuracy;
+    const double max_reach = lanes_accuracy_max_reach(mode, sqrt(edge2));
+    const double diagonal = sqrt(diag2), min_diagonal = lanes_accuracy_min_diagonal(mode);
+    if (diagonal < min_diagonal || diagonal > max_reach) {
+        free(a);
+        free(scene.verts);
+        return fail(device, LANES_ERR_BAD_INPUT,
+                    "%s: the mesh's bounding-box diagonal %.3g is %s the %.3g that %s mode's "
+                    "triangle test holds in float%s",
+                    fn, diagonal, diagonal < min_diagonal ? "below" : "beyond",
+                    diagonal < min_diagonal ? min_diagonal : max_reach, lanes_accuracy_name(mode),
+                    mode == LANES_ACCURACY_ROBUST ? "" : " (robust mode holds more: accuracy=robust)");
+    }
 
     lanes_bvh_build_options bo;
     lanes_bvh_default_options(&bo);
     bo.threads = device->threads;
     /* The wide BVH answers every query: single rays, streams and packets. */
-    lanes_scene_bounds(&scene, a->bounds_min, a->bounds_max);
     lanes_status status = lanes_wbvh_build(&scene, device->k->wide_width, &bo, &a->wide, &err);
     free(scene.verts);
     if (status != LANES_OK) {
@@ -275,6 +302,7 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
         return fail(device, status, "%s: %s", fn, err.message);
     }
     a->triangles = triangle_count;
+    a->max_reach = max_reach;
     a->skipped = triangle_count - finite;
     a->device = device;
     atomic_fetch_add(&device->refs, 1);
@@ -307,36 +335,76 @@ LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info 
     memcpy(info->bounds_min, accel->bounds_min, sizeof info->bounds_min);
     memcpy(info->bounds_max, accel->bounds_max, sizeof info->bounds_max);
     info->build_seconds = accel->wide.build_seconds;
+    info->max_reach = accel->max_reach;
     return LANES_OK;
 }
 
 /* --------------------------------------------------------------- queries */
 
-/* Invalid rays are traced as inactive ones (misses); the first is named. */
-typedef struct invalid_rays {
-    size_t count, first;
-} invalid_rays;
+/* Rays the kernels cannot answer right are traced as inactive ones
+ * (misses): invalid ones, and those starting so far from the mesh that the
+ * triangle test would overflow. The first of each kind is named. */
+typedef struct refused_rays {
+    size_t invalid, first_invalid;
+    size_t far, first_far;
+    double first_far_reach;
+} refused_rays;
 
-static lanes_status query_result(lanes_accel accel, const char *fn, const invalid_rays *bad)
+static lanes_status query_result(lanes_accel accel, const char *fn, const refused_rays *bad)
 {
-    if (!bad->count) return LANES_OK;
-    return fail(accel->device, LANES_ERR_BAD_INPUT,
-                "%s: %zu invalid ray%s (NaN or infinite origin or direction, zero direction, or "
-                "NaN tnear/tfar), the first is ray %zu; they were reported as misses",
-                fn, bad->count, bad->count == 1 ? "" : "s", bad->first);
+    if (bad->invalid)
+        return fail(accel->device, LANES_ERR_BAD_INPUT,
+                    "%s: %zu invalid ray%s (NaN or infinite origin or direction, zero direction, "
+                    "or NaN tnear/tfar), the first is ray %zu%s; they were reported as misses",
+                    fn, bad->invalid, bad->invalid == 1 ? "" : "s", bad->first_invalid,
+                    bad->far ? ", and rays starting too far from the mesh" : "");
+    if (bad->far)
+        return fail(accel->device, LANES_ERR_BAD_INPUT,
+                    "%s: %zu ray%s start%s too far from the mesh for %s mode: ray %zu reaches "
+                    "%.3g across it, beyond the %.3g its triangle test holds in float (float "
+                    "overflows)%s; they were reported as misses",
+                    fn, bad->far, bad->far == 1 ? "" : "s", bad->far == 1 ? "s" : "",
+                    lanes_accuracy_name(accel->device->accuracy), bad->first_far,
+                    bad->first_far_reach, accel->max_reach,
+                    accel->device->accuracy == LANES_ACCURACY_ROBUST
+                        ? ""
+                        : " (robust mode reaches further: accuracy=robust)");
+    return LANES_OK;
+}
+
+/* The squared diagonal of the box of the mesh and the ray's origin, in
+ * double: the longest distance the ray's triangle tests meet, squared. */
+static double ray_reach2(lanes_accel accel, const lanes_ray *ray)
+{
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double o = ray->o[k];
+        double e = fmax(accel->bounds_max[k], o) - fmin(accel->bounds_min[k], o);
+        d2 += e * e;
+    }
+    return d2;
 }
 
 /* Ray i of a SoA stream in the kernels' form, prepared for the device's
- * accuracy mode. */
-static lanes_ray load_ray(const lanes_rays_soa *r, size_t i, lanes_rcp_mode rcp,
-                          invalid_rays *bad, size_t index)
+ * accuracy mode, or made inactive when it is refused. */
+static lanes_ray load_ray(lanes_accel accel, const lanes_rays_soa *r, size_t i, lanes_rcp_mode rcp,
+                          refused_rays *bad, size_t index)
 {
     lanes_ray ray = {{r->org_x[i], r->org_y[i], r->org_z[i]},
                      {r->dir_x[i], r->dir_y[i], r->dir_z[i]},
                      {0, 0, 0},
                      r->tnear[i],
                      r->tfar[i]};
-    if (!lanes_ray_prepare_rcp(&ray, rcp) && bad->count++ == 0) bad->first = index;
+    if (!lanes_ray_prepare_rcp(&ray, rcp)) {
+        if (bad->invalid++ == 0) bad->first_invalid = index;
+        return ray;
+    }
+    double reach2 = ray_reach2(accel, &ray);
+    if (reach2 > accel->max_reach * accel->max_reach) {
+        if (bad->far++ == 0) bad->first_far = index, bad->first_far_reach = sqrt(reach2);
+        ray.tnear = INFINITY;
+        ray.tfar = -INFINITY;
+    }
     return ray;
 }
 
@@ -387,8 +455,8 @@ LANES_API lanes_status lanes_intersect1(lanes_accel accel, const lanes_ray1 *ray
     if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
-    invalid_rays bad = {0, 0};
-    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
+    refused_rays bad = {0};
+    lanes_ray r = load_ray(accel, &one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     lanes_hit found;
     d->k->trace_wide(&accel->wide, d->accuracy, &r, 1, &found, NULL);
     lanes_hits_soa out = {&hit->t, &hit->u, &hit->v, &hit->prim_id};
@@ -403,8 +471,8 @@ LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray,
     if (st != LANES_OK) return st;
     const lanes_device d = accel->device;
     lanes_rays_soa one = single_as_soa(ray);
-    invalid_rays bad = {0, 0};
-    lanes_ray r = load_ray(&one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
+    refused_rays bad = {0};
+    lanes_ray r = load_ray(accel, &one, 0, lanes_accuracy_precision(d->accuracy).rcp, &bad, 0);
     uint8_t hit = 0;
     d->k->occluded_wide(&accel->wide, d->accuracy, &r, 1, &hit, NULL);
     *occluded = hit != 0;
@@ -422,12 +490,12 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
 {
     const lanes_device d = accel->device;
     const lanes_rcp_mode rcp = lanes_accuracy_precision(d->accuracy).rcp;
-    invalid_rays bad = {0, 0};
+    refused_rays bad = {0};
     lanes_ray chunk[STREAM_CHUNK];
     lanes_hit found[STREAM_CHUNK];
     for (size_t first = 0; first < n; first += STREAM_CHUNK) {
         size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
-        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(rays, first + i, rcp, &bad, first + i);
+        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
         if (occluded) {
             memset(occluded + first, 0, m);
             (packets ? d->k->occluded_hybrid : d->k->occluded_wide)(&accel->wide, d->accuracy, chunk, m,

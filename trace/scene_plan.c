@@ -5,8 +5,6 @@
 #include <math.h>
 #include <string.h>
 
-
-
 void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_plan *plan)
 {
     memset(plan, 0, sizeof *plan);
@@ -119,28 +117,29 @@ lanes_status lanes_scene_plan_check(const lanes_scene_plan *p, lanes_error *err)
 {
     if (!p->has_vertices) return LANES_OK;
     const char *mode = lanes_accuracy_name(p->accuracy);
-    if (p->accuracy == LANES_ACCURACY_ROBUST) {
-        if (p->diagonal < LANES_PLAN_ROBUST_MIN_DIAGONAL)
+    const bool robust = p->accuracy == LANES_ACCURACY_ROBUST;
+    const double min_diagonal = lanes_accuracy_min_diagonal(p->accuracy);
+    if (p->diagonal < min_diagonal) {
+        if (robust)
             return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                    "the scene's diagonal %.3g is below the %.0e robust mode can trace "
                                    "(its triangle test multiplies two distances: float underflows)",
-                                   p->diagonal, LANES_PLAN_ROBUST_MIN_DIAGONAL);
-        if (p->reach > LANES_PLAN_ROBUST_MAX_REACH)
-            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
-                                   "the scene with its camera spans %.3g, beyond the %.0e robust mode "
-                                   "can trace (its triangle test multiplies two distances: float "
-                                   "overflows)",
-                                   p->reach, LANES_PLAN_ROBUST_MAX_REACH);
-        return LANES_OK;
-    }
-    if (p->diagonal < LANES_PLAN_MOLLER_MIN_DIAGONAL)
+                                   p->diagonal, min_diagonal);
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "the scene's diagonal %.3g is below the %.0e %s mode can trace (its "
                                "triangle test multiplies a distance and two edges: float underflows); "
                                "robust mode traces it down to %.0e",
-                               p->diagonal, LANES_PLAN_MOLLER_MIN_DIAGONAL, mode,
-                               LANES_PLAN_ROBUST_MIN_DIAGONAL);
-    if (6.0 * p->reach * p->longest_edge * p->longest_edge > FLT_MAX)
+                               p->diagonal, min_diagonal, mode,
+                               lanes_accuracy_min_diagonal(LANES_ACCURACY_ROBUST));
+    }
+    const double max_reach = lanes_accuracy_max_reach(p->accuracy, p->longest_edge);
+    if (p->reach > max_reach) {
+        if (robust)
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                   "the scene with its camera spans %.3g, beyond the %.0e robust mode "
+                                   "can trace (its triangle test multiplies two distances: float "
+                                   "overflows)",
+                                   p->reach, max_reach);
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "the scene is too large for %s mode: its triangle test multiplies a "
                                "distance (up to %.3g with the camera) and two edges (up to %.3g), "
@@ -148,6 +147,7 @@ lanes_status lanes_scene_plan_check(const lanes_scene_plan *p, lanes_error *err)
                                "distances up to %.0e",
                                mode, p->reach, p->longest_edge,
                                6.0 * p->reach * p->longest_edge * p->longest_edge, (double)FLT_MAX,
-                               LANES_PLAN_ROBUST_MAX_REACH);
+                               lanes_accuracy_max_reach(LANES_ACCURACY_ROBUST, p->longest_edge));
+    }
     return LANES_OK;
 }

@@ -54,29 +54,14 @@ typedef struct lanes_scene_plan {
  * mirror-box scene of tests/test_scale_sweep.c it turns at 26 diagonals;
  * default mode still renders right at 87 and first fails at 261. */
 
-/* The sizes each mode's arithmetic holds (uniform scale or distance, not
- * position: triangle tests subtract the ray origin first).
- * - Fast and default (Möller-Trumbore): t's numerator is a product of a
- *   distance and two edges, at most 6 reach * longest_edge^2, which must not
- *   overflow float (3.4e38); and det, a product of two edges, and that
- *   numerator must stay normal floats (above 1.2e-38) for the scene's own
- *   size: its diagonal at least 1e-11 (the sweep loses most shadows at a
- *   diagonal of 1e-13 and renders right at 1e-12).
- * - Robust (watertight): products of two distances only, divided before
- *   the third factor: reach up to 1e18 (its square 1e36) and a diagonal
- *   from 1e-15 (right at 1e-16, shadows lost at 1e-17).
- * Outside them lanes_scene_plan_check refuses the scene. */
-#define LANES_PLAN_MOLLER_MIN_DIAGONAL 1e-11
-#define LANES_PLAN_ROBUST_MIN_DIAGONAL 1e-15
-#define LANES_PLAN_ROBUST_MAX_REACH 1e18
-
 /* requested: the --accuracy / API choice, or -1 to take the scene file's
  * (scene->accuracy), or else LANES_ACCURACY_DEFAULT. */
 void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_plan *plan);
 
 /* LANES_ERR_BAD_INPUT, with a message naming the size and the limit, when
- * the plan's accuracy mode cannot trace the scene at its size (see the
- * limits above); LANES_OK for a scene without a finite vertex. */
+ * the plan's accuracy mode cannot trace the scene at its size, its reach
+ * taking in the camera (the limits of build/accuracy.h); LANES_OK for a
+ * scene without a finite vertex. */
 lanes_status lanes_scene_plan_check(const lanes_scene_plan *plan, lanes_error *err);
 
 /* Prints what was switched on and off, and why. */

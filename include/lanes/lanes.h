@@ -24,7 +24,11 @@
  *   or infinite component in org or dir, a zero direction, or a NaN tnear
  *   or tfar is invalid: it is reported as a miss (not occluded), and the
  *   call returns LANES_ERR_BAD_INPUT naming the first such ray, after it
- *   has traced every valid one.
+ *   has traced every valid one. So is a ray that starts too far from the
+ *   mesh for the accuracy mode's float arithmetic: further than its limit
+ *   (lanes_accel_info.max_reach) across the box of the mesh and the origin
+ *   (default and fast modes: FLT_MAX / (6 * longest_edge^2), 5.7e17 for
+ *   edges of 1e10; robust: 1e18).
  * - Thread safety: a device and an accel are immutable once created. Any
  *   number of threads may query one accel at once, and create accels on one
  *   device at once. Releasing an object while another thread uses it is
@@ -44,7 +48,7 @@ extern "C" {
 #endif
 
 #define LANES_VERSION_MAJOR 0
-#define LANES_VERSION_MINOR 2
+#define LANES_VERSION_MINOR 3
 #define LANES_VERSION_PATCH 0
 /* major * 10000 + minor * 100 + patch, for #if */
 #define LANES_VERSION                                                                      \
@@ -201,7 +205,10 @@ typedef struct lanes_accel_impl *lanes_accel;
  * in lanes_accel_info.skipped; none finite is LANES_ERR_BAD_INPUT);
  * degenerate (zero-area) ones are never hit.
  * prim_id in results is the triangle's position in `indices`. At least one
- * triangle; at most 2^31 - 1. On error *accel is NULL. */
+ * triangle; at most 2^31 - 1. A mesh whose bounding-box diagonal the
+ * device's accuracy mode cannot trace in float is LANES_ERR_BAD_INPUT:
+ * below 1e-11 in fast and default modes, 1e-15 in robust mode, or beyond
+ * max_reach. On error *accel is NULL. */
 LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
                                           size_t vertex_count, const uint32_t *indices,
                                           size_t triangle_count, lanes_accel *accel);
@@ -218,6 +225,8 @@ typedef struct lanes_accel_info {
     size_t bytes;       /* memory held */
     float bounds_min[3], bounds_max[3];
     double build_seconds;
+    double max_reach;   /* the longest distance across the box of the mesh and
+                           a ray's origin that the accuracy mode traces */
 } lanes_accel_info;
 LANES_API lanes_status lanes_accel_get_info(lanes_accel accel, lanes_accel_info *info);
 
