@@ -288,7 +288,12 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
                     "triangle test holds in float%s",
                     fn, diagonal, diagonal < min_diagonal ? "below" : "beyond",
                     diagonal < min_diagonal ? min_diagonal : max_reach, lanes_accuracy_name(mode),
-                    mode == LANES_ACCURACY_ROBUST ? "" : " (robust mode holds more: accuracy=robust)");
+                    mode != LANES_ACCURACY_ROBUST &&
+                            (diagonal < min_diagonal
+                                 ? LANES_ROBUST_MIN_DIAGONAL < min_diagonal
+                                 : lanes_accuracy_max_reach(LANES_ACCURACY_ROBUST, 0) > max_reach)
+                        ? " (robust mode holds more: accuracy=robust)"
+                        : "");
     }
 
     lanes_bvh_build_options bo;
@@ -366,9 +371,9 @@ static lanes_status query_result(lanes_accel accel, const char *fn, const refuse
                     fn, bad->far, bad->far == 1 ? "" : "s", bad->far == 1 ? "s" : "",
                     lanes_accuracy_name(accel->device->accuracy), bad->first_far,
                     bad->first_far_reach, accel->max_reach,
-                    accel->device->accuracy == LANES_ACCURACY_ROBUST
-                        ? ""
-                        : " (robust mode reaches further: accuracy=robust)");
+                    lanes_accuracy_max_reach(LANES_ACCURACY_ROBUST, 0) > accel->max_reach
+                        ? " (robust mode reaches further: accuracy=robust)"
+                        : "");
     return LANES_OK;
 }
 
