@@ -58,6 +58,14 @@ static bool obj_index(mesh_stream *s, mesh_tok field, mesh_tok whole, obj_ref *r
     char b[48];
     if (mesh_parse_int(field, &i) != NUM_OK)
         return mesh_fail_line(s, "bad %s index in '%s'", ref->what, mesh_tok_str(whole, b));
+    /* Assimp 5.2 steps over as many characters as the value has digits, so
+     * a '+' or a leading zero leaves digits behind that it reads as more
+     * indices ("f 1 2 +4" is the quad 1 2 4 4). */
+    size_t sign = field.p[0] == '-';
+    if (field.p[0] == '+' || (field.n > sign + 1 && field.p[sign] == '0'))
+        return mesh_fail_line(s, "%s index '%s' with a '+' or a leading zero (Assimp reads it as "
+                                 "several indices)",
+                              ref->what, mesh_tok_str(whole, b));
     if (i == 0)
         return mesh_fail_line(s, "%s index 0 in '%s' (OBJ indices start at 1)", ref->what,
                               mesh_tok_str(whole, b));

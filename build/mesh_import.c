@@ -103,11 +103,16 @@ static void io_flush(struct aiFile *a)
     (void)a;
 }
 
+/* io->UserData, when set, is the one path Assimp may open: an OBJ file's
+ * material libraries ("mtllib", any path, the file itself included) are
+ * not read, since lanes assigns its own materials. Other formats may need
+ * files beside them (a glTF file's buffers). */
 static struct aiFile *io_open(struct aiFileIO *io, const char *path, const char *mode)
 {
-    (void)io;
     struct stat st;
-    if (strpbrk(mode, "wa+") || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+    const char *only = (const char *)io->UserData;
+    if ((only && strcmp(path, only) != 0) || strpbrk(mode, "wa+") || stat(path, &st) != 0 ||
+        !S_ISREG(st.st_mode))
         return NULL;
     struct aiFile *a = calloc(1, sizeof *a);
     io_state *state = calloc(1, sizeof *state);
@@ -385,7 +390,7 @@ lanes_status lanes_mesh_read(const char *path, lanes_mesh *out, lanes_error *err
     }
     /* Skeleton-only meshes are bone visualizations, not geometry. */
     aiSetImportPropertyInteger(props, AI_CONFIG_IMPORT_NO_SKELETON_MESHES, 1);
-    struct aiFileIO io = {io_open, io_close, NULL};
+    struct aiFileIO io = {io_open, io_close, mesh_ext_is(path, "obj") ? (aiUserData)path : NULL};
     const struct aiScene *sc = aiImportFileExWithProperties(path, 0, &io, props);
     aiReleasePropertyStore(props);
     if (!sc) {

@@ -505,6 +505,8 @@ static void test_mesh_formats(void)
     check_mesh_file(data("meshes/ok/tet_upper.stl"), 4, 4, z3, one);
     /* backslash continuations, joined as Assimp joins them */
     check_mesh_file(data("meshes/ok/continued.obj"), 2, 4, z3, unit_xy);
+    /* mtllib names this file and one elsewhere; neither is read */
+    check_mesh_file(data("meshes/ok/mtllib.obj"), 2, 4, z3, unit_xy);
     /* Node transforms: the root translates by (10,0,0) and holds the
      * triangle; its child scales by 2 and holds it again, so the child's
      * copy is scaled first, then translated. */
@@ -927,6 +929,8 @@ static const bad_case bad_meshes[] = {
     {"meshes/bad/index_oob.obj", {"line 5", "out of range"}},
     {"meshes/bad/index_zero.obj", {"line 4", "index 0"}},
     {"meshes/bad/index_negative.obj", {"line 4", "-4"}},
+    {"meshes/bad/index_plus.obj", {"line 5", "'+4'", "several indices"}},
+    {"meshes/bad/index_leading_zero.obj", {"line 6", "'004'", "leading zero"}},
     {"meshes/bad/index_oob.off", {"line 7", "out of range"}},
     {"meshes/bad/index_oob.ply", {"line 14", "out of range"}},
     {"meshes/bad/truncated_vertices.off", {"line 5"}},
