@@ -195,14 +195,15 @@ acc_tri_result acc_ref_tri(const float o[3], const float d[3], const float *v)
 /* ---- the walk -------------------------------------------------------- */
 
 typedef struct {
-    double o[3], inv[3], omag;
+    double o[3], inv[3], omag, widen;
     bool zero[3];
 } ref_ray;
 
-static ref_ray ref_ray_make(const float o[3], const float d[3])
+static ref_ray ref_ray_make(const float o[3], const float d[3], double widen)
 {
     ref_ray r;
     r.omag = 0.0;
+    r.widen = widen;
     for (int a = 0; a < 3; a++) {
         r.o[a] = o[a];
         r.zero[a] = d[a] == 0.0f;
@@ -213,14 +214,16 @@ static ref_ray ref_ray_make(const float o[3], const float d[3])
 }
 
 /* Slab test for t >= 0 against the node's box widened by 1e-12 of the
- * magnitudes involved: ten thousand times the rounding of the double slab
- * distances, so no ray that touches the box is turned away. */
+ * magnitudes involved (ten thousand times the rounding of the double slab
+ * distances, so no ray that touches the box is turned away) and by `widen`
+ * of the planes' distances from the origin. */
 static bool ref_box(const lanes_bvh2_node *nd, const ref_ray *r)
 {
     double tin = 0.0, tout = INFINITY;
     for (int a = 0; a < 3; a++) {
         double lo = nd->min[a], hi = nd->max[a];
-        double w = 1e-12 * (fabs(lo) + fabs(hi) + r->omag) + 1e-30;
+        double w = 1e-12 * (fabs(lo) + fabs(hi) + r->omag) +
+                   r->widen * (fabs(lo - r->o[a]) + fabs(hi - r->o[a])) + 1e-30;
         lo -= w, hi += w;
         if (r->zero[a]) {
             if (r->o[a] < lo || r->o[a] > hi) return false;
@@ -237,14 +240,12 @@ static bool ref_box(const lanes_bvh2_node *nd, const ref_ray *r)
     return tin <= tout;
 }
 
-/* Visits the triangles of every leaf whose box the ray touches; visit()
- * returns true to stop. */
-static bool walk(const acc_ref *r, const float o[3], const float d[3],
-                 bool (*visit)(void *ctx, const acc_tri_result *t), void *ctx)
+bool acc_ref_walk(const acc_ref *r, const float o[3], const float d[3], double widen,
+                  bool (*visit)(void *ctx, uint32_t prim), void *ctx)
 {
     const lanes_bvh2 *b = r->bvh;
     if (b->node_count == 0) return false;
-    ref_ray rr = ref_ray_make(o, d);
+    ref_ray rr = ref_ray_make(o, d, widen);
     uint32_t stack[2 * LANES_BVH_MAX_DEPTH + 2];
     int sp = 0;
     if (ref_box(&b->nodes[0], &rr)) stack[sp++] = 0;
@@ -252,9 +253,7 @@ static bool walk(const acc_ref *r, const float o[3], const float d[3],
         const lanes_bvh2_node *nd = &b->nodes[stack[--sp]];
         if (nd->count > 0) {
             for (uint32_t k = 0; k < nd->count; k++) {
-                uint32_t prim = b->prim_index[nd->first + k];
-                acc_tri_result t = acc_ref_tri(o, d, r->verts + (size_t)prim * 9);
-                if (visit(ctx, &t)) return true;
+                if (visit(ctx, b->prim_index[nd->first + k])) return true;
             }
             continue;
         }
@@ -264,28 +263,43 @@ static bool walk(const acc_ref *r, const float o[3], const float d[3],
     return false;
 }
 
-static bool visit_any(void *ctx, const acc_tri_result *t)
+/* The ray and the reference the visitors below test each triangle with. */
+typedef struct {
+    const acc_ref *ref;
+    const float *o, *d;
+    size_t count;
+} tri_visit;
+
+static acc_tri_result visit_tri(const tri_visit *v, uint32_t prim)
 {
-    (void)ctx;
-    return t->crosses && t->t_sign >= 0;
+    return acc_ref_tri(v->o, v->d, v->ref->verts + (size_t)prim * 9);
+}
+
+static bool visit_any(void *ctx, uint32_t prim)
+{
+    acc_tri_result t = visit_tri(ctx, prim);
+    return t.crosses && t.t_sign >= 0;
 }
 
 bool acc_ref_any(const acc_ref *r, const float o[3], const float d[3])
 {
-    return walk(r, o, d, visit_any, NULL);
+    tri_visit v = {r, o, d, 0};
+    return acc_ref_walk(r, o, d, 0.0, visit_any, &v);
 }
 
-static bool visit_count(void *ctx, const acc_tri_result *t)
+static bool visit_count(void *ctx, uint32_t prim)
 {
-    if (t->crosses && t->t_sign > 0) ++*(size_t *)ctx;
+    tri_visit *v = ctx;
+    acc_tri_result t = visit_tri(v, prim);
+    if (t.crosses && t.t_sign > 0) v->count++;
     return false;
 }
 
 size_t acc_ref_crossings(const acc_ref *r, const float o[3], const float d[3])
 {
-    size_t n = 0;
-    walk(r, o, d, visit_count, &n);
-    return n;
+    tri_visit v = {r, o, d, 0};
+    acc_ref_walk(r, o, d, 0.0, visit_count, &v);
+    return v.count;
 }
 
 /* ---- distance -------------------------------------------------------- */

@@ -49,6 +49,13 @@ typedef struct acc_ref {
 /* Fails (with a message) when some triangle lies outside a box above it. */
 lanes_status acc_ref_init(acc_ref *r, const lanes_bvh2 *bvh, const lanes_scene *scene, lanes_error *err);
 
+/* Calls visit(ctx, prim) for each triangle of every leaf whose box the ray
+ * o + t d, t >= 0, touches: with widen = 0 a superset of the triangles the
+ * ray meets (the boxes are widened beyond the walk's own rounding); with
+ * widen > 0 also those it passes within about widen times their distance
+ * from o. visit returns true to stop the walk (the result). */
+bool acc_ref_walk(const acc_ref *r, const float o[3], const float d[3], double widen,
+                  bool (*visit)(void *ctx, uint32_t prim), void *ctx);
 /* Does the ray o + t d, t >= 0, meet any triangle? */
 bool acc_ref_any(const acc_ref *r, const float o[3], const float d[3]);
 /* Triangles the ray meets at t > 0 (a crossing through a shared edge or

@@ -204,6 +204,17 @@ unsigned long cli_parse_count(const cli_args *a, const char *option, const char 
     return v;
 }
 
+double cli_parse_real(const cli_args *a, const char *option, const char *text, double min, double max)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (text[0] == '\0' || *end != '\0' || errno == ERANGE || !(v >= min && v <= max))
+        cli_usage_error(a->ctx, a->cmd, "%s: expected a number from %g to %g, got '%s'", option, min,
+                        max, text);
+    return v;
+}
+
 void cli_apply_isa(cli_context *ctx, const char *name)
 {
     char why[256];

@@ -96,6 +96,8 @@ _Noreturn void cli_unknown_option(const cli_args *a);
 /* A decimal integer in [min, max]; anything else is a usage error naming the option. */
 unsigned long cli_parse_count(const cli_args *a, const char *option, const char *text,
                               unsigned long min, unsigned long max);
+/* A finite real number in [min, max]; anything else is a usage error naming the option. */
+double cli_parse_real(const cli_args *a, const char *option, const char *text, double min, double max);
 
 /* --isa NAME: forces the set through lanes_set_isa_by_name(); an unknown
  * name or a set this CPU cannot run ends the program with status 2. */

@@ -24,7 +24,7 @@
 
 #include "bench/cli_common.h"
 #include "bench/embree_adapter.h"
-#include "bench/hits_classify.h"
+#include "bench/hits_judge.h"
 #include "bench/ray_sets.h"
 #include "build/bvh.h"
 #include "build/parallel.h"
@@ -220,7 +220,7 @@ typedef struct {
     lanes_isa isa;
     ray_kind kind;
     size_t rays, agree;
-    hits_differences differ; /* why the others differ */
+    hits_verdicts differ; /* the others, judged by the exact reference */
 } agreement;
 
 typedef struct {
@@ -257,6 +257,7 @@ typedef struct {
     bool isa_given;
     lanes_isa isa;
     lanes_accuracy accuracy; /* of every lanes configuration */
+    double scale, translate; /* the scene moved: p' = scale p + translate */
 } options;
 
 typedef struct {
@@ -265,6 +266,7 @@ typedef struct {
     lanes_bvh2 bvh2;
     lanes_wbvh wide[3]; /* widths 4, 8, 16 */
     lanes_embree *embree;
+    hits_judge judge; /* over bvh2 */
     lanes_isa isas[LANES_ISA_COUNT];
     int isa_count;
     lanes_isa ref_isa; /* traces the primary rays the secondary ones start from */
@@ -425,7 +427,10 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             c->res.rows[i].ratio = best > 0 ? c->res.rows[i].mrays / best : 0.0;
     }
 
-    /* agreement: each set's wide scheme against rtcIntersect1/rtcOccluded1 */
+    /* agreement: each set's wide scheme against rtcIntersect1/rtcOccluded1,
+     * each difference judged */
+    judge_cache jc;
+    if (!judge_cache_init(&jc, rays, n)) cli_fail("compare: out of memory");
     lanes_hit *ref_hits = occl ? NULL : malloc(nn * sizeof *ref_hits);
     uint8_t *ref_occ = occl ? malloc(nn) : NULL;
     if (!ref_hits && !ref_occ) cli_fail("compare: out of memory");
@@ -446,18 +451,21 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
                            : hits_same(&cfg[i].lj.hits[r], &ref_hits[r]);
             if (ok) {
                 a->agree++;
-            } else if (!occl) {
-                hits_classify(&c->scene, &rays[r], &cfg[i].lj.hits[r], &ref_hits[r], &a->differ);
-            } else {
-                /* the blockers behind the two answers, one ray each */
-                lanes_hit lh, eh;
-                cfg[i].lj.k->trace_wide(cfg[i].lj.wide, cfg[i].lj.accuracy, &cfg[i].lj.rays[r], 1,
-                                        &lh, NULL);
-                lanes_embree_trace1(c->embree, &rays[r], 1, &eh);
-                hits_classify(&c->scene, &rays[r], &lh, &eh, &a->differ);
+                continue;
             }
+            judge_answer la = {.test = judge_test_of(c->opt.accuracy), .occlusion = occl},
+                         ea = {.test = JUDGE_MOLLER, .occlusion = occl};
+            if (occl) {
+                la.occluded = cfg[i].lj.occluded[r] != 0;
+                ea.occluded = ref_occ[r] != 0;
+            } else {
+                la.prim = cfg[i].lj.hits[r].prim, la.t = cfg[i].lj.hits[r].t;
+                ea.prim = ref_hits[r].prim, ea.t = ref_hits[r].t;
+            }
+            hits_judge_pair(&c->judge, &jc, r, &la, &ea, &a->differ);
         }
     }
+    judge_cache_free(&jc);
     free(ref_hits);
     free(ref_occ);
     for (int i = 0; i < ncfg; i++) {
@@ -508,6 +516,10 @@ static void print_json(const compare *c, double embree_build)
     printf(",\n  \"embree_isa\": ");
     cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
     printf(",\n  \"accuracy\": \"%s\"", lanes_accuracy_name(c->opt.accuracy));
+    printf(",\n  \"scale\": ");
+    cli_json_number(stdout, c->opt.scale);
+    printf(",\n  \"translate\": ");
+    cli_json_number(stdout, c->opt.translate);
     printf(",\n  \"image\": [%d, %d],\n  \"reps\": %d,\n", c->width, c->height, c->opt.reps);
     printf("  \"ray_counts\": {");
     for (int k = 0; k < KIND_COUNT; k++)
@@ -536,18 +548,18 @@ static void print_json(const compare *c, double embree_build)
     for (size_t i = 0; i < c->res.agree_count; i++) {
         const agreement *a = &c->res.agree[i];
         printf("    {\"isa\": \"%s\", \"rays\": \"%s\", \"fraction\": %.6f, \"count\": %zu, "
-               "\"agree\": %zu, \"ties\": %zu, \"grazing\": %zu, \"other\": %zu}%s\n",
+               "\"agree\": %zu, \"lanes_wrong\": %zu, \"embree_wrong\": %zu, \"both_acceptable\": %zu}%s\n",
                lanes_isa_name(a->isa), kind_names[a->kind],
-               a->rays ? (double)a->agree / (double)a->rays : 1.0, a->rays, a->agree, a->differ.ties,
-               a->differ.grazing, a->differ.other, i + 1 < c->res.agree_count ? "," : "");
+               a->rays ? (double)a->agree / (double)a->rays : 1.0, a->rays, a->agree, a->differ.lanes_wrong,
+               a->differ.embree_wrong, a->differ.both_acceptable, i + 1 < c->res.agree_count ? "," : "");
     }
     printf("  ]\n}\n");
 }
 
 static const char usage[] =
     "usage: lanes compare [SCENE] [--isa NAME] [--embree-isa NAME] [--threads N]\n"
-    "                     [--rays N] [--reps N] [--accuracy M] [--csv FILE] [--json]\n"
-    "                     [--quick]\n"
+    "                     [--rays N] [--reps N] [--accuracy M] [--scale S]\n"
+    "                     [--translate T] [--csv FILE] [--json] [--quick]\n"
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
@@ -569,13 +581,23 @@ static const char usage[] =
     "  --reps N           timed repetitions, median reported (default 5)\n"
     "  --accuracy M       lanes' accuracy mode: fast, default (Moller, exact 1/d) or\n"
     "                     robust (watertight, widened boxes); see lanes render --explain\n"
+    "  --scale S          the scene (triangles, lights, camera) scaled by S about the\n"
+    "  --translate T      origin, then moved by T along every axis (default 1, 0):\n"
+    "                     the same rays' numerical difficulty at another scale and\n"
+    "                     distance from the origin\n"
     "  --csv FILE         also write the table rows to FILE\n"
     "  --json             one JSON object on stdout instead of the table\n"
     "  --quick            16384 camera rays, 2 repetitions (a smoke test)\n"
     "\n"
     "rays: primary (8x8 tiles, Morton order inside), shadow (primary hit to the\n"
     "first point light), diffuse (one cosine-weighted bounce per primary hit,\n"
-    "fixed seed) and diffuse-shuffled (the same rays in random order).\n";
+    "fixed seed) and diffuse-shuffled (the same rays in random order).\n"
+    "\n"
+    "agreement: each set's wide traversal against rtcIntersect1 / rtcOccluded1 on the\n"
+    "same rays; every ray they disagree on is judged by the exact reference of lanes\n"
+    "accuracy (each engine's float triangle test's rounding bound around the exact\n"
+    "edge functions and t): lanes wrong, Embree wrong, or both acceptable (a true tie\n"
+    "or graze).\n";
 
 static int allowed_cpus(int *cpus, int max)
 {
@@ -603,6 +625,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     o->rays = -1;
     o->reps = -1;
     o->accuracy = LANES_ACCURACY_DEFAULT;
+    o->scale = 1.0;
     o->embree_isa = lanes_embree_isa_best();
     o->isa_given = ctx->forced_isa != LANES_ISA_NONE;
     o->isa = ctx->forced_isa;
@@ -625,6 +648,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             int m = lanes_accuracy_from_name(v);
             if (m < 0) cli_usage_error(ctx, self, "--accuracy: unknown mode '%s' (fast, default, robust)", v);
             o->accuracy = (lanes_accuracy)m;
+        } else if (cli_value(&a, "--scale", &v)) {
+            o->scale = cli_parse_real(&a, "--scale", v, 1e-30, 1e30);
+        } else if (cli_value(&a, "--translate", &v)) {
+            o->translate = cli_parse_real(&a, "--translate", v, -1e30, 1e30);
         } else if (cli_value(&a, "--reps", &v)) {
             o->reps = (int)cli_parse_count(&a, "--reps", v, 1, 64);
         } else if (cli_value(&a, "--embree-isa", &v)) {
@@ -654,6 +681,9 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     memset(&err, 0, sizeof err);
     if (lanes_scene_load(o->scene_spec, &c->scene, &err) != LANES_OK) cli_fail("%s", err.message);
     if (c->scene.triangle_count == 0) cli_fail("compare: scene '%s' has no triangles", o->scene_spec);
+    if ((o->scale != 1.0 || o->translate != 0.0) &&
+        lanes_scene_scale_translate(&c->scene, o->scale, o->translate, &err) != LANES_OK)
+        cli_fail("compare: %s: %s", o->scene_spec, err.message);
 
     /* The lanes sets to measure: every supported one, unless the user chose
      * a set (--isa, or LANES_ISA, already validated by lanes_isa_init) or
@@ -696,8 +726,11 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
                    lanes_kernels_for(c->isas[i])->wide_width);
         printf(", accuracy %s", lanes_accuracy_name(o->accuracy));
         printf("\nembree:   %s, ISA %s\n", RTC_VERSION_STRING, lanes_embree_isa_name(o->embree_isa));
-        printf("scene:    %s (%zu triangles)\n", c->scene.name[0] ? c->scene.name : o->scene_spec,
+        printf("scene:    %s (%zu triangles", c->scene.name[0] ? c->scene.name : o->scene_spec,
                c->scene.triangle_count);
+        if (o->scale != 1.0 || o->translate != 0.0)
+            printf("; scaled by %g, moved by %g on every axis", o->scale, o->translate);
+        printf(")\n");
         fflush(stdout);
     }
 
@@ -706,6 +739,8 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     lanes_bvh_default_options(&bo);
     bo.threads = o->threads;
     if (lanes_bvh2_build(&c->scene, &bo, &c->bvh2, &err) != LANES_OK) cli_fail("compare: %s", err.message);
+    if (hits_judge_init(&c->judge, &c->scene, &c->bvh2, o->accuracy == LANES_ACCURACY_ROBUST, &err) != LANES_OK)
+        cli_fail("compare: %s", err.message);
     bool need[3] = {false, false, false};
     for (int i = 0; i < c->isa_count; i++)
         need[width_slot(lanes_kernels_for(c->isas[i])->wide_width)] = true;
@@ -790,17 +825,19 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         print_json(c, eb);
     } else {
         print_table(stdout, c);
-        printf("\nagreement of lanes (wide, Moller) with Embree (rtcIntersect1 / rtcOccluded1): same\n"
-               "primitive and t within 1e-4 relative, or both miss; shadow rays: same occlusion.\n"
-               "Differences: ties = two triangles at the same t; grazing = a hit within 1e-4\n"
-               "(barycentric) of a triangle edge or within the float test's rounding error of\n"
-               "one (small triangles seen edge-on), or at an end of the ray's interval.\n");
+        printf("\nagreement of lanes (wide, %s) with Embree (rtcIntersect1 / rtcOccluded1, Moller):\n"
+               "same primitive and t within 1e-4 relative, or both miss; shadow rays: same\n"
+               "occlusion. Each difference judged by the exact reference: an answer is wrong\n"
+               "when the float test's proven rounding bound cannot explain it; both acceptable\n"
+               "when both can be (a true tie or graze).\n",
+               judge_test_of(o->accuracy) == JUDGE_WATERTIGHT ? "watertight" : "Moller");
         for (size_t i = 0; i < c->res.agree_count; i++) {
             const agreement *ag = &c->res.agree[i];
-            printf("  %-10s %-17s %8.4f%%  (%zu of %zu differ: %zu ties, %zu grazing, %zu other)\n",
+            printf("  %-10s %-17s %8.4f%%  (%zu of %zu differ: %zu lanes wrong, %zu Embree wrong, "
+                   "%zu both acceptable)\n",
                    lanes_isa_name(ag->isa), kind_names[ag->kind],
-                   ag->rays ? 100.0 * (double)ag->agree / (double)ag->rays : 100.0,
-                   ag->rays - ag->agree, ag->rays, ag->differ.ties, ag->differ.grazing, ag->differ.other);
+                   ag->rays ? 100.0 * (double)ag->agree / (double)ag->rays : 100.0, ag->rays - ag->agree,
+                   ag->rays, ag->differ.lanes_wrong, ag->differ.embree_wrong, ag->differ.both_acceptable);
         }
     }
     if (csv) write_csv(csv, o->csv, c);
@@ -816,6 +853,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     lanes_embree_destroy(c->embree);
     for (int s = 0; s < 3; s++)
         if (c->wide[s].width) lanes_wbvh_free(&c->wide[s]);
+    hits_judge_free(&c->judge);
     lanes_bvh2_free(&c->bvh2);
     lanes_scene_free(&c->scene);
     free(c);

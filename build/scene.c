@@ -5,6 +5,7 @@
 
 #include "build/memory_limit.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -215,6 +216,71 @@ lanes_status lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_lig
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for lights");
     }
     scene->area_lights[scene->area_light_count++] = *l;
+    return LANES_OK;
+}
+
+/* The largest |s p + t| over the points and extents the scene holds, in
+ * double (monotone in each coordinate, so the extremes come from the
+ * extremes of the input). */
+static double moved_reach(double s, double t, const float v[3], double reach)
+{
+    for (int a = 0; a < 3; a++) reach = fmax(reach, fabs(s * v[a] + t));
+    return reach;
+}
+
+lanes_status lanes_scene_scale_translate(lanes_scene *scene, double s, double t, lanes_error *err)
+{
+    if (!(s > 0.0) || !isfinite(s) || !isfinite(t))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "scale %g and translation %g: the scale must be finite and positive, "
+                               "the translation finite", s, t);
+    float lo[3], hi[3];
+    double reach = 0.0;
+    if (scene->triangle_count > 0) {
+        lanes_scene_bounds(scene, lo, hi);
+        reach = moved_reach(s, t, hi, moved_reach(s, t, lo, reach));
+    }
+    for (size_t i = 0; i < scene->point_light_count; i++)
+        reach = moved_reach(s, t, scene->point_lights[i].position, reach);
+    for (size_t i = 0; i < scene->area_light_count; i++) {
+        const lanes_area_light *l = &scene->area_lights[i];
+        float far[3];
+        for (int a = 0; a < 3; a++) far[a] = l->corner[a] + l->edge_u[a] + l->edge_v[a];
+        reach = moved_reach(s, t, far, moved_reach(s, t, l->corner, reach));
+    }
+    reach = moved_reach(s, t, scene->camera.eye, moved_reach(s, t, scene->camera.target, reach));
+    for (size_t i = 0; i < scene->point_light_count; i++)
+        for (int a = 0; a < 3; a++)
+            if (!((double)scene->point_lights[i].intensity[a] * s * s <= FLT_MAX))
+                return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                                       "scale %g: point light %zu's intensity, scaled by the square of "
+                                       "the scale to keep its irradiance, overflows float", s, i);
+    if (!(reach <= (double)LANES_SCENE_MAX_COORD))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "scale %g and translation %g move the scene to coordinates of %g, beyond "
+                               "the %g a scene's coordinates may reach", s, t, reach,
+                               (double)LANES_SCENE_MAX_COORD);
+
+    lanes_xform x;
+    const double tt[3] = {t, t, t}, ss[3] = {s, s, s};
+    lanes_xform_trs(&x, tt, NULL, ss);
+    for (size_t i = 0; i < 3 * scene->triangle_count; i++)
+        lanes_xform_apply(&x, scene->verts + 3 * i, scene->verts + 3 * i);
+    for (size_t i = 0; i < scene->point_light_count; i++) {
+        lanes_point_light *l = &scene->point_lights[i];
+        lanes_xform_apply(&x, l->position, l->position);
+        for (int a = 0; a < 3; a++) l->intensity[a] = (float)(s * s * l->intensity[a]);
+    }
+    for (size_t i = 0; i < scene->area_light_count; i++) {
+        lanes_area_light *l = &scene->area_lights[i];
+        lanes_xform_apply(&x, l->corner, l->corner);
+        for (int a = 0; a < 3; a++) {
+            l->edge_u[a] = (float)(s * l->edge_u[a]);
+            l->edge_v[a] = (float)(s * l->edge_v[a]);
+        }
+    }
+    lanes_xform_apply(&x, scene->camera.eye, scene->camera.eye);
+    lanes_xform_apply(&x, scene->camera.target, scene->camera.target);
     return LANES_OK;
 }
 

@@ -189,6 +189,15 @@ void lanes_xform_rotation(lanes_xform *out, const double axis[3], double degrees
 /* out may alias in. */
 void lanes_xform_apply(const lanes_xform *x, const float in[3], float out[3]);
 
+/* Moves the whole scene by a uniform scale about the origin, then a
+ * translation by t on every axis (p' = s p + (t, t, t), computed in double
+ * and rounded once): triangles, lights and camera alike, so the image is
+ * the same scene seen from the same place (point lights' intensities are
+ * multiplied by s^2, which keeps the irradiance they give). Fails, leaving the scene
+ * unchanged, when s is not finite and positive, t is not finite, or a
+ * coordinate would leave LANES_SCENE_MAX_COORD. */
+lanes_status lanes_scene_scale_translate(lanes_scene *scene, double s, double t, lanes_error *err);
+
 /* Appends the mesh's triangles, transformed by xf (NULL: identity), all with
  * material `material` (which must exist). Fails on non-finite transformed
  * vertices or out-of-range indices, naming `what` (e.g. the file) in the
