@@ -98,6 +98,12 @@ typedef struct lanes_wbvh {
     size_t node_count;      /* node 0 is the root */
     unsigned char *blocks;
     size_t block_count;
+    /* Set by lanes_wbvh_share: the leaf blocks hold only uint32_t
+     * prim[width] (lanes_wblock_id_bytes), and the kernels gather triangle
+     * prim's vertices shared_verts[3 * shared_indices[3 * prim + c] + a]
+     * from these arrays, which belong to the caller. */
+    const float *shared_verts;
+    const uint32_t *shared_indices;
     size_t prim_count;      /* triangles in the leaves (padding lanes not counted) */
     double build_seconds;   /* lanes_wbvh_build: BVH2 and collapse; else the collapse */
     double collapse_seconds;
@@ -106,6 +112,12 @@ typedef struct lanes_wbvh {
 
 static inline size_t lanes_wnode_bytes(int width) { return ((size_t)width * 28 + 63) / 64 * 64; }
 static inline size_t lanes_wblock_bytes(int width) { return ((size_t)width * 40 + 31) / 32 * 32; }
+static inline size_t lanes_wblock_id_bytes(int width) { return ((size_t)width * 4 + 31) / 32 * 32; }
+/* The bytes from one leaf block to the next, in either layout. */
+static inline size_t lanes_wblock_stride(const lanes_wbvh *w)
+{
+    return w->shared_verts ? lanes_wblock_id_bytes(w->width) : lanes_wblock_bytes(w->width);
+}
 static inline bool lanes_wref_is_leaf(uint32_t ref) { return ref != LANES_WBVH_EMPTY && (ref & LANES_WREF_LEAF); }
 static inline uint32_t lanes_wref_block(uint32_t ref) { return (ref & ~LANES_WREF_LEAF) >> 4; }
 static inline uint32_t lanes_wref_blocks(uint32_t ref) { return (ref & 15u) + 1u; }
@@ -117,13 +129,15 @@ static inline const uint32_t *lanes_wnode_refs(const lanes_wbvh *w, size_t node)
 {
     return (const uint32_t *)(const void *)(lanes_wnode_bounds(w, node) + 6 * w->width);
 }
+/* Not for a shared tree, whose blocks hold no vertices. */
 static inline const float *lanes_wblock_verts(const lanes_wbvh *w, size_t block)
 {
     return (const float *)(const void *)(w->blocks + block * lanes_wblock_bytes(w->width));
 }
 static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t block)
 {
-    return (const uint32_t *)(const void *)(lanes_wblock_verts(w, block) + 9 * w->width);
+    const unsigned char *b = w->blocks + block * lanes_wblock_stride(w);
+    return (const uint32_t *)(const void *)(w->shared_verts ? b : b + 36 * (size_t)w->width);
 }
 
 /* Collapses by repeatedly replacing the child with the largest surface area
@@ -137,6 +151,18 @@ static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t blo
  * LANES_WLEAF_MAX_BLOCKS blocks (max_leaf_size above 16 * width). */
 lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err);
 void lanes_wbvh_free(lanes_wbvh *w);
+
+/* Turns a tree into one that shares the caller's triangles instead of
+ * holding copies: its leaf blocks keep only the triangle ids (4 bytes per
+ * lane instead of 40), and the kernels gather the vertices from verts and
+ * indices (the arrays the tree's scene was made from: triangle i's
+ * vertices at verts + 3 * indices[3 * i + c]), which must outlive the tree
+ * unchanged. Triangles of no area are found per test (tris_have_area), as
+ * for BVH2 leaves. The gathers take 32-bit offsets: at most
+ * LANES_WBVH_SHARED_MAX triangles and vertices. Fails (the tree unchanged)
+ * out of memory. */
+#define LANES_WBVH_SHARED_MAX ((size_t)INT32_MAX / 3)
+lanes_status lanes_wbvh_share(lanes_wbvh *w, const float *verts, const uint32_t *indices, lanes_error *err);
 
 /* The wide BVH the kernel sets of node width `width` traverse, built for
  * it from the scene: a BVH2 whose leaves fill at most one block of `width`

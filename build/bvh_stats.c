@@ -26,7 +26,7 @@ size_t lanes_bvh2_bytes(const lanes_bvh2 *bvh)
 size_t lanes_wbvh_bytes(const lanes_wbvh *w)
 {
     if (!w) return 0;
-    return w->node_count * lanes_wnode_bytes(w->width) + w->block_count * lanes_wblock_bytes(w->width);
+    return w->node_count * lanes_wnode_bytes(w->width) + w->block_count * lanes_wblock_stride(w);
 }
 
 typedef struct walk_item {

@@ -53,6 +53,21 @@ void lanes_wbvh_free(lanes_wbvh *w)
     memset(w, 0, sizeof *w);
 }
 
+lanes_status lanes_wbvh_share(lanes_wbvh *w, const float *verts, const uint32_t *indices, lanes_error *err)
+{
+    size_t stride = lanes_wblock_id_bytes(w->width);
+    unsigned char *ids = lanes_big_alloc(w->block_count ? w->block_count : 1, stride);
+    if (!ids) return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "wide bvh: out of memory");
+    memset(ids, 0xff, (w->block_count ? w->block_count : 1) * stride);
+    for (size_t b = 0; b < w->block_count; b++)
+        memcpy(ids + b * stride, lanes_wblock_prims(w, b), (size_t)w->width * sizeof(uint32_t));
+    free(w->blocks);
+    w->blocks = ids;
+    w->shared_verts = verts;
+    w->shared_indices = indices;
+    return LANES_OK;
+}
+
 /* The builder's reasons are fixed texts; running out of memory is the one
  * that is not the input's fault. */
 static lanes_status fail(lanes_error *err, const char *why)

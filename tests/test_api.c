@@ -3,8 +3,9 @@
  * error (status, message, callback), accels from arrays, the three query
  * forms against a brute-force double-precision reference and against each
  * other at every instruction set this CPU runs and every accuracy mode,
- * invalid rays, packets of any size, the sizes each accuracy mode traces
- * or refuses, and concurrent queries of one accel.
+ * invalid rays, packets of any size, accels over the caller's arrays
+ * (shared, not copied) against copied ones bit for bit, the sizes each
+ * accuracy mode traces or refuses, and concurrent queries of one accel.
  *
  *   test_api [--expect-refused SET]   (SET must be refused as the CPU lacking it)
  */
@@ -35,15 +36,17 @@ typedef struct mesh {
     size_t nv, nt;
 } mesh;
 
-/* A bumpy 24x24 height field (shared vertices, like a real mesh) and 300
- * loose random triangles above it. */
+/* A bumpy 24x24 height field (shared vertices, like a real mesh), 300
+ * loose random triangles above it, and triangles of no area among the
+ * height field's (a repeated vertex; three points on a line), which the
+ * copied and the shared leaf layouts must both leave out. */
 static mesh make_mesh(void)
 {
     mesh m;
     const int g = 24;
-    const size_t loose = 300;
-    m.nv = (size_t)(g + 1) * (g + 1) + 3 * loose;
-    m.nt = (size_t)2 * g * g + loose;
+    const size_t loose = 300, flat = 24;
+    m.nv = (size_t)(g + 1) * (g + 1) + 3 * loose + 3;
+    m.nt = (size_t)2 * g * g + loose + flat;
     m.v = malloc(m.nv * 3 * sizeof(float));
     m.idx = malloc(m.nt * 3 * sizeof(uint32_t));
     size_t nv = 0, nt = 0;
@@ -71,6 +74,16 @@ static mesh make_mesh(void)
         }
         nt++;
     }
+    const float line[9] = {-1.25f, 0.0f, -0.75f, -0.875f, 0.0625f, -0.5f, -0.5f, 0.125f, -0.25f}; /* exact */
+    memcpy(m.v + 3 * nv, line, sizeof line);
+    for (size_t i = 0; i < flat; i++) {
+        uint32_t a = (uint32_t)(i * 17 % ((size_t)g * g)), b = a + 1;
+        uint32_t q[3] = {a, b, a};
+        if (i % 3 == 0) q[0] = (uint32_t)nv, q[1] = (uint32_t)nv + 1, q[2] = (uint32_t)nv + 2;
+        memcpy(m.idx + 3 * nt, q, sizeof q);
+        nt++;
+    }
+    nv += 3;
     return m;
 }
 
@@ -284,6 +297,18 @@ static void test_argument_errors(const mesh *m)
                  "vertex index", "index out of range");
     expect_error(lanes_accel_create(NULL, m->v, m->nv, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT, "device", "NULL device");
     CHECK(callback_calls == 4, "callback calls %d, want 4 (not for a NULL device)", callback_calls);
+    expect_error(lanes_accel_create_shared(d, NULL, m->nv, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT, "vertices",
+                 "shared: NULL vertices");
+    expect_error(lanes_accel_create_shared(d, m->v, m->nv - 1, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT,
+                 "vertex index", "shared: index out of range");
+    /* The gathers' 32-bit offsets bound a shared accel, not a copied one
+     * (the vertex count only bounds the indices: nothing past them is read). */
+    expect_error(lanes_accel_create_shared(d, m->v, (size_t)INT32_MAX, m->idx, m->nt, &a), LANES_ERR_BAD_INPUT,
+                 "32-bit offsets", "shared: 2^31-1 vertices");
+    CHECK(a == NULL, "shared accel not NULL on error");
+    CHECK(lanes_accel_create(d, m->v, (size_t)INT32_MAX, m->idx, m->nt, &a) == LANES_OK,
+          "copied accel of 2^31-1 vertices: %s", lanes_last_error_message());
+    lanes_accel_release(a);
 
     /* The status comes from where the failure was found: an accel that
      * cannot fit is out of memory, a limit that is no size is bad input. */
@@ -295,20 +320,30 @@ static void test_argument_errors(const mesh *m)
                  "'lots' is not a size", "LANES_MEMORY_LIMIT=lots");
     unsetenv("LANES_MEMORY_LIMIT");
 
-    /* A triangle with a NaN vertex is left out and never hit. */
+    /* A triangle with a NaN vertex is left out and never hit, copied or
+     * shared (the NaN triangle comes first, so a shared leaf that gathered
+     * it would answer it). */
     float tri[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     float nan_tri[18];
     memcpy(nan_tri, tri, sizeof tri);
     memcpy(nan_tri + 9, tri, sizeof tri);
-    nan_tri[9] = NAN;
+    nan_tri[0] = NAN;
     uint32_t idx[6] = {0, 1, 2, 3, 4, 5};
-    CHECK(lanes_accel_create(d, nan_tri, 6, idx, 2, &a) == LANES_OK, "NaN vertex: %s", lanes_last_error_message());
     lanes_accel_info ai;
-    lanes_accel_get_info(a, &ai);
-    CHECK(ai.triangles == 2 && ai.skipped == 1, "NaN triangle: %zu triangles, %zu skipped", ai.triangles, ai.skipped);
     lanes_ray1 ray = {{0.2f, 0.2f, -1}, {0, 0, 1}, 0, INFINITY};
     lanes_hit1 hit;
-    CHECK(lanes_intersect1(a, &ray, &hit) == LANES_OK && hit.prim_id == 0 && fabsf(hit.t - 1.0f) < 1e-6f,
+    CHECK(lanes_accel_create_shared(d, nan_tri, 6, idx, 2, &a) == LANES_OK, "shared, NaN vertex: %s",
+          lanes_last_error_message());
+    lanes_accel_get_info(a, &ai);
+    CHECK(ai.triangles == 2 && ai.skipped == 1, "shared, NaN triangle: %zu triangles, %zu skipped", ai.triangles,
+          ai.skipped);
+    CHECK(lanes_intersect1(a, &ray, &hit) == LANES_OK && hit.prim_id == 1 && fabsf(hit.t - 1.0f) < 1e-6f,
+          "shared: hit the finite triangle: prim %u t %g", hit.prim_id, hit.t);
+    lanes_accel_release(a);
+    CHECK(lanes_accel_create(d, nan_tri, 6, idx, 2, &a) == LANES_OK, "NaN vertex: %s", lanes_last_error_message());
+    lanes_accel_get_info(a, &ai);
+    CHECK(ai.triangles == 2 && ai.skipped == 1, "NaN triangle: %zu triangles, %zu skipped", ai.triangles, ai.skipped);
+    CHECK(lanes_intersect1(a, &ray, &hit) == LANES_OK && hit.prim_id == 1 && fabsf(hit.t - 1.0f) < 1e-6f,
           "hit the finite triangle: prim %u t %g", hit.prim_id, hit.t);
     bool occ = false;
     CHECK(lanes_occluded1(a, &ray, &occ) == LANES_OK && occ, "occluded");
@@ -394,6 +429,42 @@ static size_t differences(const results *a, const results *b, size_t n, bool occ
     return diff;
 }
 
+/* Every output bit for bit: t, u, v, triangle and occlusion. */
+static size_t not_identical(const results *a, const results *b, size_t n)
+{
+    size_t diff = 0;
+    for (size_t i = 0; i < n; i++)
+        diff += memcmp(&a->t[i], &b->t[i], sizeof(float)) || memcmp(&a->u[i], &b->u[i], sizeof(float)) ||
+                memcmp(&a->v[i], &b->v[i], sizeof(float)) || a->prim[i] != b->prim[i] || a->occ[i] != b->occ[i];
+    return diff;
+}
+
+/* An accel over the caller's arrays answers every query form as the copied
+ * one does, bit for bit, and holds less. */
+static void check_shared(const char *config, lanes_device d, const mesh *m, const rayset *rays,
+                         const results *stream, const results *packet, const results *one, size_t copied_bytes)
+{
+    lanes_accel a;
+    CHECK(lanes_accel_create_shared(d, m->v, m->nv, m->idx, m->nt, &a) == LANES_OK, "%s: shared accel: %s",
+          config, lanes_last_error_message());
+    if (!a) return;
+    lanes_accel_info ai;
+    lanes_accel_get_info(a, &ai);
+    CHECK(ai.triangles == m->nt && ai.bytes < copied_bytes, "%s: shared accel: %zu triangles, %zu bytes (copied %zu)",
+          config, ai.triangles, ai.bytes, copied_bytes);
+    size_t n = rays->n;
+    results s = alloc_results(n), p = alloc_results(n), o = alloc_results(n);
+    trace_all(a, rays, &s, &p, &o);
+    size_t ds = not_identical(stream, &s, n), dp = not_identical(packet, &p, n), d1 = not_identical(one, &o, n);
+    CHECK(ds == 0 && dp == 0 && d1 == 0,
+          "%s: the shared accel differs from the copied one on %zu stream, %zu packet, %zu single rays", config, ds,
+          dp, d1);
+    printf("%s %s: shared accel (%zu bytes, copied %zu) answers as the copied one, bit for bit\n",
+           ds + dp + d1 == 0 ? "PASS" : "FAIL", config, ai.bytes, copied_bytes);
+    free_results(&s), free_results(&p), free_results(&o);
+    lanes_accel_release(a);
+}
+
 static void test_queries(const mesh *m)
 {
     const size_t n = 6000;
@@ -429,6 +500,7 @@ static void test_queries(const mesh *m)
             CHECK(ai.node_width == di.node_width && ai.triangles == m->nt && ai.skipped == 0,
                   "%s: node width %d (device %d), %zu triangles", config, ai.node_width, di.node_width, ai.triangles);
             trace_all(a, &rays, &stream, &packet, &one);
+            check_shared(config, d, m, &rays, &stream, &packet, &one, ai.bytes);
 
             size_t wrong = 0, close_calls = 0, hits = 0, occ_wrong = 0;
             for (size_t i = 0; i < n; i++) {
@@ -529,8 +601,9 @@ static void test_threads(const mesh *m)
     rayset rays = make_rays(n);
     lanes_device d;
     lanes_device_create(NULL, &d);
-    lanes_accel a;
+    lanes_accel a, shared;
     lanes_accel_create(d, m->v, m->nv, m->idx, m->nt, &a);
+    lanes_accel_create_shared(d, m->v, m->nv, m->idx, m->nt, &shared);
     results alone = alloc_results(n);
     lanes_rays_soa s = soa(&rays);
     lanes_hits_soa h = hits_of(&alone);
@@ -540,22 +613,24 @@ static void test_threads(const mesh *m)
     worker w[THREADS];
     pthread_t th[THREADS];
     for (int i = 0; i < THREADS; i++) {
-        w[i] = (worker){a, &rays, alloc_results(n), i % 2 == 1, LANES_OK};
+        w[i] = (worker){i < THREADS / 2 ? a : shared, &rays, alloc_results(n), i % 2 == 1, LANES_OK};
         pthread_create(&th[i], NULL, work, &w[i]);
     }
     for (int i = 0; i < THREADS; i++) pthread_join(th[i], NULL);
     for (int i = 0; i < THREADS; i++) {
         CHECK(w[i].st == LANES_OK, "thread %d: %s", i, lanes_status_name(w[i].st));
         size_t diff = differences(&alone, &w[i].out, n, false);
-        CHECK(diff == 0, "thread %d (%s) differs from the single-threaded result on %zu rays", i,
-              w[i].packets ? "packets" : "stream", diff);
+        CHECK(diff == 0, "thread %d (%s, %s accel) differs from the single-threaded result on %zu rays", i,
+              w[i].packets ? "packets" : "stream", w[i].accel == shared ? "shared" : "copied", diff);
         free_results(&w[i].out);
     }
-    printf("%d threads queried one accel at once: %s\n", THREADS, harness.failures ? "see above" : "same results");
+    printf("%d threads queried a copied and a shared accel at once: %s\n", THREADS,
+           harness.failures ? "see above" : "same results");
     /* Accels keep their device: releasing the device first is allowed. */
     lanes_device_release(d);
     CHECK(lanes_intersect_stream(a, &s, 16, &h) == LANES_OK, "query after the device's release");
     lanes_accel_release(a);
+    lanes_accel_release(shared);
     free_results(&alone);
     free_rays(&rays);
 }

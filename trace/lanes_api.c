@@ -213,11 +213,13 @@ LANES_API lanes_status lanes_device_get_info(lanes_device device, lanes_device_i
 
 /* ----------------------------------------------------------------- accel */
 
-LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
-                                          size_t vertex_count, const uint32_t *indices,
-                                          size_t triangle_count, lanes_accel *accel)
+/* lanes_accel_create and lanes_accel_create_shared (named fn): the same
+ * build; a shared accel then drops its copies of the triangles and keeps
+ * the caller's arrays. */
+static lanes_status accel_create(const char *fn, lanes_device device, const float *vertices,
+                                 size_t vertex_count, const uint32_t *indices, size_t triangle_count,
+                                 bool shared, lanes_accel *accel)
 {
-    static const char fn[] = "lanes_accel_create";
     if (!accel) return fail(device, LANES_ERR_BAD_INPUT, "%s: accel is NULL", fn);
     *accel = NULL;
     if (!device) return fail(NULL, LANES_ERR_BAD_INPUT, "%s: device is NULL", fn);
@@ -228,6 +230,11 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     if (triangle_count > (size_t)INT32_MAX)
         return fail(device, LANES_ERR_BAD_INPUT, "%s: %zu triangles; at most %d", fn,
                     triangle_count, INT32_MAX);
+    if (shared && (triangle_count > LANES_WBVH_SHARED_MAX || vertex_count > LANES_WBVH_SHARED_MAX))
+        return fail(device, LANES_ERR_BAD_INPUT,
+                    "%s: %zu triangles and %zu vertices; a shared accel gathers with 32-bit offsets, "
+                    "so at most %zu of each (lanes_accel_create copies and holds more)",
+                    fn, triangle_count, vertex_count, LANES_WBVH_SHARED_MAX);
     for (size_t i = 0; i < 3 * triangle_count; i++)
         if (indices[i] >= vertex_count)
             return fail(device, LANES_ERR_BAD_INPUT,
@@ -302,6 +309,8 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     /* The wide BVH answers every query: single rays, streams and packets. */
     lanes_status status = lanes_wbvh_build(&scene, device->k->wide_width, &bo, &a->wide, &err);
     free(scene.verts);
+    if (status == LANES_OK && shared && (status = lanes_wbvh_share(&a->wide, vertices, indices, &err)) != LANES_OK)
+        lanes_wbvh_free(&a->wide);
     if (status != LANES_OK) {
         free(a);
         return fail(device, status, "%s: %s", fn, err.message);
@@ -313,6 +322,22 @@ LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vert
     atomic_fetch_add(&device->refs, 1);
     *accel = a;
     return LANES_OK;
+}
+
+LANES_API lanes_status lanes_accel_create(lanes_device device, const float *vertices,
+                                          size_t vertex_count, const uint32_t *indices,
+                                          size_t triangle_count, lanes_accel *accel)
+{
+    return accel_create("lanes_accel_create", device, vertices, vertex_count, indices, triangle_count, false,
+                        accel);
+}
+
+LANES_API lanes_status lanes_accel_create_shared(lanes_device device, const float *vertices,
+                                                 size_t vertex_count, const uint32_t *indices,
+                                                 size_t triangle_count, lanes_accel *accel)
+{
+    return accel_create("lanes_accel_create_shared", device, vertices, vertex_count, indices, triangle_count,
+                        true, accel);
 }
 
 LANES_API lanes_status lanes_accel_release(lanes_accel accel)

@@ -249,15 +249,14 @@ LANES_BODY void finish_alone(packet_state *s, int i, uint32_t ref, float t, bool
 /* A leaf, ray by ray. */
 LANES_BODY void packet_leaf(packet_state *s, uint32_t ref, uint32_t act, bool any, lanes_trace_stats *stats)
 {
-    const unsigned char *blk = s->wb->blocks + (size_t)lanes_wref_block(ref) * BLOCK_BYTES;
     while (act) {
         int i = __builtin_ctz(act);
         act &= act - 1;
         const wide_setup *w = ray_setup(s, i);
         if (stats) stats->leaves_visited++;
         if (!any) {
-            leaf_closest(s->prec.algo, w, blk, lanes_wref_blocks(ref), &s->tfar[i], &s->hits[i], stats);
-        } else if (leaf_any(s->prec.algo, w, blk, lanes_wref_blocks(ref), stats)) {
+            leaf_closest(s->wb, s->prec.algo, w, ref, &s->tfar[i], &s->hits[i], stats);
+        } else if (leaf_any(s->wb, s->prec.algo, w, ref, stats)) {
             s->occluded[i] = 1;
             s->live &= ~(1u << i);
         }

@@ -414,6 +414,30 @@ LANES_BODY tri_result ray_vs_block(lanes_tri_algo algo, const wide_setup *w, con
     return ray_vs_vectors(algo, w, v, tfar, vm_true(), want_uv);
 }
 
+/* Lanes k .. k+LANES_W-1 of a shared leaf block (lanes_wbvh_share): triangle
+ * ids, whose vertices are gathered from the caller's arrays (indices: three
+ * per triangle; verts: xyz per vertex) in field's axis order. Padding
+ * (LANES_NO_HIT) gathers triangle 0 and is masked off; triangles of no area
+ * are found here, as in ray_vs_tris, where the copied blocks hold NaN. */
+LANES_BODY tri_result ray_vs_shared(lanes_tri_algo algo, const wide_setup *w, const float *verts,
+                                    const uint32_t *indices, const uint32_t *prim, size_t k, vfloat tfar,
+                                    bool want_uv)
+{
+    vint id = vi_loadu((const int32_t *)(const void *)(prim + k));
+    vmask real = vm_not(vi_lt(id, vi_zero()));
+    id = vi_select(real, id, vi_zero());
+    vint at = vi_add(vi_add(id, id), id);
+    vfloat v[3][3];
+    for (int c = 0; c < 3; c++) {
+        vint vtx = vi_gather((const int32_t *)(const void *)indices + c, at);
+        vint base = vi_add(vi_add(vtx, vtx), vtx);
+        for (int a = 0; a < 3; a++) v[c][a] = vf_gather(verts + (w->field[c][a] - 3 * c), base);
+    }
+    vmask live = vm_and(real, tris_have_area(v[0][0], v[0][1], v[0][2], v[1][0], v[1][1], v[1][2], v[2][0],
+                                             v[2][1], v[2][2]));
+    return ray_vs_vectors(algo, w, v, tfar, live, want_uv);
+}
+
 /* Closest hit: the ray's tfar shrinks to the best t so far, so later
  * vectors only report nearer (or equally near) hits; ties keep the lowest
  * index because a later vector must be strictly nearer to win. */

@@ -82,7 +82,11 @@ LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, int slab, fl
     return bits;
 }
 
-enum { NODE_BYTES = (WIDE_WIDTH * 28 + 63) / 64 * 64, BLOCK_BYTES = (WIDE_WIDTH * 40 + 31) / 32 * 32 };
+enum {
+    NODE_BYTES = (WIDE_WIDTH * 28 + 63) / 64 * 64,
+    BLOCK_BYTES = (WIDE_WIDTH * 40 + 31) / 32 * 32,
+    ID_BLOCK_BYTES = (WIDE_WIDTH * 4 + 31) / 32 * 32
+};
 
 /* Real triangles among lanes k .. k+LANES_W-1 of a block (padding comes
  * last, lane 0 is always a triangle, so the leaf loops below read prim[]
@@ -114,17 +118,41 @@ LANES_BODY void record_hit(const tri_result *h, int lane, uint32_t prim, float *
     *tfar = hit->t;
 }
 
+/* A leaf's first block, and the bytes from one to the next: the tree's
+ * own vertices (BLOCK_BYTES) or triangle ids of the caller's arrays
+ * (lanes_wbvh_share). */
+static inline const unsigned char *leaf_blocks(const lanes_wbvh *wb, uint32_t ref)
+{
+    return wb->blocks + (size_t)lanes_wref_block(ref) * (wb->shared_verts ? ID_BLOCK_BYTES : BLOCK_BYTES);
+}
+
+static inline const uint32_t *block_prims(const lanes_wbvh *wb, const unsigned char *blk)
+{
+    return (const uint32_t *)(const void *)(wb->shared_verts ? blk : blk + 36 * WIDE_WIDTH);
+}
+
+/* Lanes k .. k+LANES_W-1 of a leaf block, in either layout. */
+LANES_BODY tri_result block_test(const lanes_wbvh *wb, lanes_tri_algo algo, const wide_setup *w,
+                                 const unsigned char *blk, int k, vfloat tfar, bool want_uv)
+{
+    if (wb->shared_verts)
+        return ray_vs_shared(algo, w, wb->shared_verts, wb->shared_indices,
+                             (const uint32_t *)(const void *)blk, (size_t)k, tfar, want_uv);
+    return ray_vs_block(algo, w, (const float *)(const void *)blk, (size_t)k, tfar, want_uv);
+}
+
 /* Closest hit in a leaf's blocks with t <= *tfar; updates *tfar and *hit.
  * Ties keep the earlier triangle. */
-LANES_BODY bool leaf_closest(lanes_tri_algo algo, const wide_setup *w, const unsigned char *blk,
-                             uint32_t nblocks, float *tfar, lanes_hit *hit, lanes_trace_stats *stats)
+LANES_BODY bool leaf_closest(const lanes_wbvh *wb, lanes_tri_algo algo, const wide_setup *w, uint32_t ref,
+                             float *tfar, lanes_hit *hit, lanes_trace_stats *stats)
 {
     bool found = false;
-    for (uint32_t b = 0; b < nblocks; b++, blk += BLOCK_BYTES) {
-        const float *v = (const float *)(const void *)blk;
-        const uint32_t *prim = (const uint32_t *)(const void *)(v + 9 * WIDE_WIDTH);
+    const unsigned char *blk = leaf_blocks(wb, ref);
+    const size_t stride = wb->shared_verts ? ID_BLOCK_BYTES : BLOCK_BYTES;
+    for (uint32_t b = 0, nblocks = lanes_wref_blocks(ref); b < nblocks; b++, blk += stride) {
+        const uint32_t *prim = block_prims(wb, blk);
         for (int k = 0; k < WIDE_WIDTH && (k == 0 || prim[k] != LANES_NO_HIT); k += LANES_W) {
-            tri_result h = ray_vs_block(algo, w, v, (size_t)k, vf_set1(*tfar), true);
+            tri_result h = block_test(wb, algo, w, blk, k, vf_set1(*tfar), true);
             if (stats) {
                 vmask live = block_live(prim, k);
                 stats->triangles_tested += (uint64_t)vm_popcount(live);
@@ -139,14 +167,15 @@ LANES_BODY bool leaf_closest(lanes_tri_algo algo, const wide_setup *w, const uns
     return found;
 }
 
-LANES_BODY bool leaf_any(lanes_tri_algo algo, const wide_setup *w, const unsigned char *blk,
-                         uint32_t nblocks, lanes_trace_stats *stats)
+LANES_BODY bool leaf_any(const lanes_wbvh *wb, lanes_tri_algo algo, const wide_setup *w, uint32_t ref,
+                         lanes_trace_stats *stats)
 {
-    for (uint32_t b = 0; b < nblocks; b++, blk += BLOCK_BYTES) {
-        const float *v = (const float *)(const void *)blk;
-        const uint32_t *prim = (const uint32_t *)(const void *)(v + 9 * WIDE_WIDTH);
+    const unsigned char *blk = leaf_blocks(wb, ref);
+    const size_t stride = wb->shared_verts ? ID_BLOCK_BYTES : BLOCK_BYTES;
+    for (uint32_t b = 0, nblocks = lanes_wref_blocks(ref); b < nblocks; b++, blk += stride) {
+        const uint32_t *prim = block_prims(wb, blk);
         for (int k = 0; k < WIDE_WIDTH && (k == 0 || prim[k] != LANES_NO_HIT); k += LANES_W) {
-            tri_result h = ray_vs_block(algo, w, v, (size_t)k, w->tfar, false);
+            tri_result h = block_test(wb, algo, w, blk, k, w->tfar, false);
             if (stats) {
                 vmask live = block_live(prim, k);
                 stats->triangles_tested += (uint64_t)vm_popcount(live);
@@ -175,8 +204,8 @@ static inline void prefetch_child(const lanes_wbvh *wb, uint32_t ref)
     const unsigned char *p;
     int lines;
     if (lanes_wref_is_leaf(ref)) {
-        p = wb->blocks + (size_t)lanes_wref_block(ref) * BLOCK_BYTES;
-        lines = (BLOCK_BYTES + 63) / 64;
+        p = leaf_blocks(wb, ref);
+        lines = ((wb->shared_verts ? ID_BLOCK_BYTES : BLOCK_BYTES) + 63) / 64;
     } else {
         p = wb->nodes + (size_t)ref * NODE_BYTES;
         lines = NODE_BYTES / 64;
@@ -214,12 +243,11 @@ LANES_BODY bool wide_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, c
     for (;;) {
         if (!(e.t > tfar * exit_scale)) {
             if (lanes_wref_is_leaf(e.ref)) {
-                const unsigned char *blk = wb->blocks + (size_t)lanes_wref_block(e.ref) * BLOCK_BYTES;
                 if (stats) stats->leaves_visited++;
                 if (any) {
-                    if (leaf_any(algo, w, blk, lanes_wref_blocks(e.ref), stats)) return true;
+                    if (leaf_any(wb, algo, w, e.ref, stats)) return true;
                 } else {
-                    found |= leaf_closest(algo, w, blk, lanes_wref_blocks(e.ref), &tfar, hit, stats);
+                    found |= leaf_closest(wb, algo, w, e.ref, &tfar, hit, stats);
                 }
             } else {
                 const float *node = (const float *)(const void *)(wb->nodes + (size_t)e.ref * NODE_BYTES);
