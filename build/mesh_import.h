@@ -44,5 +44,9 @@ lanes_status lanes_mesh_import(lanes_scene *scene, const char *path, const lanes
 /* Only the streaming validator (no Assimp). LANES_OK for formats it
  * does not know. Exposed for tests. */
 lanes_status lanes_mesh_precheck(const char *path, lanes_error *err);
+/* The pre-check, and the faces the file declares (each becomes at least
+ * one triangle; 0 for formats it does not know), for the scene loader's
+ * estimate before it reads anything. */
+lanes_status lanes_mesh_declared_faces(const char *path, double *faces, lanes_error *err);
 
 #endif

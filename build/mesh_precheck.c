@@ -113,6 +113,13 @@ static FILE *open_mesh(const char *path, long long *size, lanes_error *err)
 
 lanes_status lanes_mesh_precheck(const char *path, lanes_error *err)
 {
+    double faces;
+    return lanes_mesh_declared_faces(path, &faces, err);
+}
+
+lanes_status lanes_mesh_declared_faces(const char *path, double *faces, lanes_error *err)
+{
+    *faces = 0;
     /* the checkers below report through err, so it must exist */
     lanes_error local;
     if (!err) err = &local;
@@ -138,6 +145,7 @@ lanes_status lanes_mesh_precheck(const char *path, lanes_error *err)
     case FMT_OTHER: break;
     }
     if (ok && fmt != FMT_OTHER) ok = mesh_import_fits(s);
+    if (ok) *faces = (double)s->faces;
     free(s->ln);
     free(s);
     fclose(f);

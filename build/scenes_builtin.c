@@ -184,6 +184,31 @@ lanes_status lanes_builtin_object(const char *name, int detail, lanes_mesh *out,
     return builder_finish(&b, out, name, err);
 }
 
+double lanes_builtin_object_triangles(const char *name, int detail)
+{
+    for (size_t i = 0; i < N_CGAL; i++) {
+        char path[4096];
+        double faces = 0;
+        lanes_error ignored;
+        if (strcmp(name, cgal_meshes[i].name) != 0) continue;
+        if (detail > 4 || !mesh_path(cgal_meshes[i].file, path, sizeof path) ||
+            lanes_mesh_declared_faces(path, &faces, &ignored) != LANES_OK)
+            return 0;
+        return faces * pow(4.0, detail < 0 ? 0 : detail); /* Loop subdivision: 4 per step */
+    }
+    if (strcmp(name, primitive_names[0]) == 0) return detail > 8 ? 0 : 20.0 * pow(4.0, detail < 0 ? 3 : detail);
+    if (strcmp(name, primitive_names[1]) == 0) return 12;
+    if (strcmp(name, primitive_names[2]) == 0) {
+        double n = detail < 1 ? 1 : detail;
+        return n > 4096 ? 0 : 2 * n * n;
+    }
+    if (strcmp(name, primitive_names[3]) == 0) {
+        double seg = detail < 3 ? 32 : detail;
+        return seg > 1 << 20 ? 0 : 4 * seg; /* the side's quads and the two caps' fans */
+    }
+    return 0;
+}
+
 /* ---- scene assembly helpers ---- */
 
 static lanes_status add_mat(lanes_scene *s, const char *name, lanes_material_kind kind, double r, double g,

@@ -37,6 +37,10 @@ bool lanes_builtin_meshes_available(void);
  * y = 0, facing +z, largest extent 1. detail: icosphere level / cylinder
  * segments / Loop subdivision steps for meshes; -1 for the default. */
 lanes_status lanes_builtin_object(const char *name, int detail, lanes_mesh *out, lanes_error *err);
+/* The triangles lanes_builtin_object(name, detail) makes, known before it
+ * makes them (for a CGAL mesh, from its file's declared faces: at least
+ * that many); 0 where it would fail. */
+double lanes_builtin_object_triangles(const char *name, int detail);
 /* Names, comma-separated, for messages. */
 const char *lanes_builtin_object_names(void);
 

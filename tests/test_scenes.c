@@ -15,13 +15,17 @@
  * generated here (binary STL/PLY/GLB are written by the test, so the
  * expected bytes are visible in this file). */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE /* wait4: a child's own peak memory */
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "build/memory_limit.h"
 #include "build/mesh_import.h"
@@ -367,11 +371,138 @@ static void test_memory_limit(void)
           st == LANES_OK ? "wrong triangle count" : err.message);
     if (st == LANES_OK) lanes_mesh_free(&m);
 
+    /* The running count still refuses a scene that declared less than it
+     * makes (polygons triangulate to more triangles than faces): adding
+     * meshes one by one to a scene on a budget fails at the mesh that
+     * crosses it, whatever the arrays' capacity. */
+    setenv("LANES_MEMORY_LIMIT", limit, 1);
+    lanes_scene direct;
+    lanes_scene_init(&direct);
+    lanes_mesh sph;
+    CHECK(lanes_scene_limit_to_memory(&direct, &err) == LANES_OK &&
+              lanes_builtin_object("sphere", 6, &sph, &err) == LANES_OK,
+          "budget and sphere: %s", err.message);
+    lanes_xform ident;
+    lanes_xform_identity(&ident);
+    lanes_material grey;
+    memset(&grey, 0, sizeof grey);
+    strcpy(grey.name, "grey");
+    uint32_t grey_index;
+    CHECK(lanes_scene_add_material(&direct, &grey, &grey_index, &err) == LANES_OK, "material: %s", err.message);
+    int added = 0;
+    for (int k = 0; k < 3; k++) {
+        if (lanes_scene_add_mesh(&direct, &sph, &ident, grey_index, "sphere", &err) != LANES_OK) break;
+        added++;
+    }
+    CHECK(added == 2 && err.status == LANES_ERR_OUT_OF_MEMORY && strstr(err.message, "245760 triangles"),
+          "spheres added one by one under LANES_MEMORY_LIMIT=%s: %d added; %s", limit, added, err.message);
+    lanes_mesh_free(&sph);
+    lanes_scene_free(&direct);
+    unsetenv("LANES_MEMORY_LIMIT");
+
     /* this process: something positive */
     l = lanes_memory_limit_read();
     printf("this process may use %.1f GiB (%s)\n", l.bytes / gib,
            l.source == LANES_MEMORY_CGROUP ? "cgroup limit" : "physical memory");
     CHECK(l.bytes > 0, "this process's memory limit: %.0f", l.bytes);
+}
+
+/* ---- memory ceilings ---- */
+
+/* One load in a child process, so that its peak memory is its own: the
+ * child's resident high-water mark (wait4) less that of a child that loads
+ * nothing. The status and message come back through a pipe. */
+typedef struct child_load {
+    lanes_status status;
+    char message[512];
+    double peak_growth; /* bytes */
+} child_load;
+
+static double child_peak(const char *path, const char *limit, bool mesh_only, child_load *out)
+{
+    int fd[2];
+    if (pipe(fd) != 0) return -1;
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fd[0]);
+        child_load r = {LANES_OK, "", 0};
+        if (path) {
+            if (limit) setenv("LANES_MEMORY_LIMIT", limit, 1);
+            lanes_error err = {0};
+            if (mesh_only) {
+                lanes_mesh m;
+                if ((r.status = lanes_mesh_read(path, &m, &err)) == LANES_OK) lanes_mesh_free(&m);
+            } else {
+                lanes_scene sc;
+                if ((r.status = lanes_scene_load(path, &sc, &err)) == LANES_OK) lanes_scene_free(&sc);
+            }
+            snprintf(r.message, sizeof r.message, "%s", r.status == LANES_OK ? "loaded" : err.message);
+        }
+        ssize_t w = write(fd[1], &r, sizeof r);
+        _exit(w == (ssize_t)sizeof r ? 0 : 1);
+    }
+    close(fd[1]);
+    ssize_t got = pid > 0 ? read(fd[0], out, sizeof *out) : -1;
+    close(fd[0]);
+    int wstatus = 0;
+    struct rusage ru;
+    if (pid <= 0 || wait4(pid, &wstatus, 0, &ru) != pid || got != (ssize_t)sizeof *out || !WIFEXITED(wstatus))
+        return -1;
+    return (double)ru.ru_maxrss * 1024.0;
+}
+
+/* Every load stays under twice its bound: a load under LANES_MEMORY_LIMIT
+ * (succeeding or refused) peaks below twice the limit, and a scene refused
+ * from its declared size peaks at what parsing its file takes, having made
+ * nothing. */
+static void test_load_ceilings(void)
+{
+    child_load base, r;
+    double baseline = child_peak(NULL, NULL, false, &base);
+    CHECK(baseline > 0, "a child process's baseline peak");
+    if (baseline <= 0) return;
+
+    const char *head = "{\"materials\": {\"m\": {\"type\": \"diffuse\", \"color\": 0.5}}, \"objects\": [";
+    const char *sphere8 = "{\"builtin\": \"sphere\", \"detail\": 8, \"material\": \"m\"}";
+    size_t cap = strlen(head) + 200 * (strlen(sphere8) + 2) + 4;
+    char *text = malloc(cap), *many = strdup(scratch("spheres_200_detail_8.json"));
+    size_t len = (size_t)snprintf(text, cap, "%s", head);
+    for (int i = 0; i < 200; i++) len += (size_t)snprintf(text + len, cap - len, "%s%s", i ? ", " : "", sphere8);
+    len += (size_t)snprintf(text + len, cap - len, "]}");
+    write_file(many, text, len);
+    free(text);
+
+    const double per_triangle = (double)(LANES_SCENE_BYTES_PER_TRIANGLE + LANES_ACCEL_BYTES_PER_TRIANGLE);
+    char small[32];
+    snprintf(small, sizeof small, "%.0f", 200000.0 * per_triangle);
+    const struct {
+        const char *path, *limit;
+        bool mesh_only;
+        lanes_status want;
+        const char *needle;
+        double ceiling; /* bytes over the baseline */
+    } cases[] = {
+        /* 262,144,000 triangles declared: about 76 GiB, refused at once */
+        {many, "16G", false, LANES_ERR_OUT_OF_MEMORY, "declare 262144000 triangles", 64e6},
+        {scratch("two_spheres.json"), small, false, LANES_OK, "loaded", 2 * 200000.0 * per_triangle},
+        {scratch("three_spheres.json"), small, false, LANES_ERR_OUT_OF_MEMORY, "declare 245760 triangles",
+         2 * 200000.0 * per_triangle},
+        {scratch("sparse.ply"), "20M", true, LANES_ERR_OUT_OF_MEMORY, "importing 1000000 vertices", 2 * 20e6},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        double start = now();
+        double peak = child_peak(cases[i].path, cases[i].limit, cases[i].mesh_only, &r);
+        double seconds = now() - start, growth = peak - baseline;
+        const char *name = strrchr(cases[i].path, '/') + 1;
+        CHECK(peak > 0 && r.status == cases[i].want && strstr(r.message, cases[i].needle),
+              "%s under LANES_MEMORY_LIMIT=%s: status %s: %s", name, cases[i].limit, lanes_status_name(r.status),
+              r.message);
+        CHECK(peak > 0 && growth <= cases[i].ceiling, "%s under LANES_MEMORY_LIMIT=%s peaked %.1f MB over the "
+              "baseline; its ceiling is %.1f MB", name, cases[i].limit, growth / 1e6, cases[i].ceiling / 1e6);
+        printf("%s under LANES_MEMORY_LIMIT=%s: %s in %.2f s, peak %.1f MB over the baseline (ceiling %.1f MB)\n",
+               name, cases[i].limit, lanes_status_name(r.status), seconds, growth / 1e6, cases[i].ceiling / 1e6);
+    }
+    free(many);
 }
 
 /* ---- mesh import ---- */
@@ -1093,6 +1224,7 @@ int main(int argc, char **argv)
     } else {
         test_container();
         test_memory_limit();
+        test_load_ceilings();
         test_mesh_formats();
         test_generators();
         test_scene_files();
