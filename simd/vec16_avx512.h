@@ -95,6 +95,7 @@ static inline v16f v16f_neg(v16f a)
 {
     return _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(a), _mm512_set1_epi32((int32_t)0x80000000u)));
 }
+static inline v16f v16f_floor(v16f a) { return _mm512_roundscale_ps(a, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
 static inline v16f v16f_sqrt(v16f a) { return _mm512_sqrt_ps(a); }
 static inline v16f v16f_rcp(v16f a) { return _mm512_div_ps(_mm512_set1_ps(1.0f), a); }
 /* VRCP14PS: about 14 bits, more than RCPPS's 12. */
@@ -106,6 +107,7 @@ static inline v16f v16f_rcp_nr(v16f a)
 }
 static inline v16i v16i_add(v16i a, v16i b) { return _mm512_add_epi32(a, b); }
 static inline v16i v16i_sub(v16i a, v16i b) { return _mm512_sub_epi32(a, b); }
+static inline v16i v16i_mul(v16i a, v16i b) { return _mm512_mullo_epi32(a, b); }
 static inline v16i v16i_and(v16i a, v16i b) { return _mm512_and_si512(a, b); }
 static inline v16i v16i_or(v16i a, v16i b) { return _mm512_or_si512(a, b); }
 static inline v16i v16i_xor(v16i a, v16i b) { return _mm512_xor_si512(a, b); }

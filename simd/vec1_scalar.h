@@ -16,10 +16,14 @@
  *   With vector masks (sse4, avx, avx2) it is a load, a blend and a
  *   store, cheaper than a masked store on AMD Zen 3 (vec8_avx.h); with
  *   opmasks it is the masked store.
- * - Mask bits: lane i is bit i. */
+ * - Mask bits: lane i is bit i.
+ * - Integer add, sub and mul wrap modulo 2^32 (mul keeps the low 32 bits of
+ *   the product); srl shifts in zeros.
+ * - floor rounds toward -inf, keeping -0, infinities and NaN (quieted). */
 #ifndef LANES_SIMD_VEC1_SCALAR_H
 #define LANES_SIMD_VEC1_SCALAR_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -88,6 +92,8 @@ static inline v1f v1f_abs(v1f a)
     return a;
 }
 static inline v1f v1f_neg(v1f a) { return -a; }
+/* The baseline has no ROUNDSS (SSE4.1): libm's floorf. */
+static inline v1f v1f_floor(v1f a) { return floorf(a); }
 static inline v1f v1f_sqrt(v1f a) { return _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(a))); }
 static inline v1f v1f_rcp(v1f a) { return 1.0f / a; }
 /* RCPSS: about 12 bits. */
@@ -99,6 +105,7 @@ static inline v1f v1f_rcp_nr(v1f a)
 }
 static inline v1i v1i_add(v1i a, v1i b) { return (v1i)((uint32_t)a + (uint32_t)b); }
 static inline v1i v1i_sub(v1i a, v1i b) { return (v1i)((uint32_t)a - (uint32_t)b); }
+static inline v1i v1i_mul(v1i a, v1i b) { return (v1i)((uint32_t)a * (uint32_t)b); }
 static inline v1i v1i_and(v1i a, v1i b) { return a & b; }
 static inline v1i v1i_or(v1i a, v1i b) { return a | b; }
 static inline v1i v1i_xor(v1i a, v1i b) { return a ^ b; }

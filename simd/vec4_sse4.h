@@ -156,6 +156,7 @@ static inline v4f v4f_min(v4f a, v4f b) { return _mm_min_ps(a, b); }
 static inline v4f v4f_max(v4f a, v4f b) { return _mm_max_ps(a, b); }
 static inline v4f v4f_abs(v4f a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff))); }
 static inline v4f v4f_neg(v4f a) { return _mm_xor_ps(a, _mm_set1_ps(-0.0f)); }
+static inline v4f v4f_floor(v4f a) { return _mm_floor_ps(a); }
 static inline v4f v4f_sqrt(v4f a) { return _mm_sqrt_ps(a); }
 static inline v4f v4f_rcp(v4f a) { return _mm_div_ps(_mm_set1_ps(1.0f), a); }
 static inline v4f v4f_rcp_fast(v4f a) { return _mm_rcp_ps(a); }
@@ -166,6 +167,7 @@ static inline v4f v4f_rcp_nr(v4f a)
 }
 static inline v4i v4i_add(v4i a, v4i b) { return _mm_add_epi32(a, b); }
 static inline v4i v4i_sub(v4i a, v4i b) { return _mm_sub_epi32(a, b); }
+static inline v4i v4i_mul(v4i a, v4i b) { return _mm_mullo_epi32(a, b); }
 static inline v4i v4i_and(v4i a, v4i b) { return _mm_and_si128(a, b); }
 static inline v4i v4i_or(v4i a, v4i b) { return _mm_or_si128(a, b); }
 static inline v4i v4i_xor(v4i a, v4i b) { return _mm_xor_si128(a, b); }

@@ -101,11 +101,13 @@ static inline v8f v8f_abs(v8f a)
     return _mm256_and_ps(a, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)));
 }
 static inline v8f v8f_neg(v8f a) { return _mm256_xor_ps(a, _mm256_set1_ps(-0.0f)); }
+static inline v8f v8f_floor(v8f a) { return _mm256_floor_ps(a); }
 static inline v8f v8f_sqrt(v8f a) { return _mm256_sqrt_ps(a); }
 static inline v8f v8f_rcp(v8f a) { return _mm256_div_ps(_mm256_set1_ps(1.0f), a); }
 #if defined(__AVX2__)
 static inline v8i v8i_add(v8i a, v8i b) { return _mm256_add_epi32(a, b); }
 static inline v8i v8i_sub(v8i a, v8i b) { return _mm256_sub_epi32(a, b); }
+static inline v8i v8i_mul(v8i a, v8i b) { return _mm256_mullo_epi32(a, b); }
 static inline v8i v8i_min(v8i a, v8i b) { return _mm256_min_epi32(a, b); }
 static inline v8i v8i_max(v8i a, v8i b) { return _mm256_max_epi32(a, b); }
 static inline v8i v8i_and(v8i a, v8i b) { return _mm256_and_si256(a, b); }
@@ -118,6 +120,7 @@ static inline v8i v8i_srl(v8i a, int n) { return _mm256_srl_epi32(a, _mm_cvtsi32
     static inline v8i name(v8i a, v8i b) { return v8i_join(op(v8i_lo(a), v8i_lo(b)), op(v8i_hi(a), v8i_hi(b))); }
 LANES_V8I_HALVES(v8i_add, _mm_add_epi32)
 LANES_V8I_HALVES(v8i_sub, _mm_sub_epi32)
+LANES_V8I_HALVES(v8i_mul, _mm_mullo_epi32)
 LANES_V8I_HALVES(v8i_min, _mm_min_epi32)
 LANES_V8I_HALVES(v8i_max, _mm_max_epi32)
 #undef LANES_V8I_HALVES

@@ -41,7 +41,7 @@ endforeach()
 # be replaced by the tests' for whoever reads it after this file.
 set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
 lanes_add_kernel_sets(test_simd_ops_set
-  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops_set.c
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_simd_ops_set.c ${CMAKE_CURRENT_LIST_DIR}/test_simd_math_set.c
   SETS ${LANES_BUILT_ISAS}
   LINK lanes_build_flags)
 set(lanes_simd_test_objects "${LANES_KERNEL_OBJECTS}")

@@ -34,6 +34,8 @@ void simd_end(simd_ctx *c);
  * from the generated list of sets). */
 #ifdef LANES_FN
 void LANES_FN(test_simd_ops_run)(simd_ctx *c);
+/* In test_simd_math_set.c: simd/vmath.h and simd/vrandom.h. */
+void LANES_FN(test_simd_math_run)(simd_ctx *c);
 #endif
 
 #endif

@@ -431,6 +431,26 @@ static void test_unary(simd_ctx *c, rng *r)
     })
     simd_end(c);
 
+    simd_begin(c, "floor");
+    UNARY_LOOP({
+        vstore(R, vf_floor(vload(A)));
+        for (int i = 0; i < W; i++) {
+            /* bit for bit, -0 and infinities kept; a NaN comes back a NaN */
+            float want = floorf(A[i]);
+            if (!same(R[i], want)) simd_fail(c, "floor(%a) = %a, expected %a", (double)A[i], (double)R[i], (double)want);
+        }
+    })
+    /* just below and above integers, where a floor by conversion goes wrong */
+    for (int k = -300; k <= 300; k++) {
+        float x = ldexpf((float)k, (k % 7) * 3), lo = nextafterf(x, -INFINITY), hi = nextafterf(x, INFINITY);
+        float A[3] = {lo, x, hi};
+        for (int j = 0; j < 3; j++) {
+            float got = vf_lane(vf_floor(vf_set1(A[j])), 0);
+            if (!same(got, floorf(A[j]))) simd_fail(c, "floor(%a) = %a, expected %a", (double)A[j], (double)got, (double)floorf(A[j]));
+        }
+    }
+    simd_end(c);
+
     simd_begin(c, "sqrt");
     UNARY_LOOP({
         vstore(R, vf_sqrt(vload(A)));
@@ -629,7 +649,7 @@ static void test_reduce(simd_ctx *c, rng *r)
 
 static void test_int(simd_ctx *c, rng *r)
 {
-    simd_begin(c, "int add/sub/and/or/xor/shifts/min/max/compares");
+    simd_begin(c, "int add/sub/mul/and/or/xor/shifts/min/max/compares");
     static const int32_t specials[] = {0, 1, -1, 2147483647, -2147483647 - 1, 0x55555555, -0x55555556, 65536, -65536};
     for (int k = 0; k < 20000; k++) {
         int32_t A[W], B[W], R[12][W];
@@ -648,13 +668,15 @@ static void test_int(simd_ctx *c, rng *r)
         istore(R[6], vi_srl(a, sh));
         istore(R[7], vi_min(a, b));
         istore(R[8], vi_max(a, b));
+        istore(R[9], vi_mul(a, b));
         uint32_t eq = vm_bits(vi_eq(a, b)), lt = vm_bits(vi_lt(a, b)), gt = vm_bits(vi_gt(a, b));
-        static const char *const names[9] = {"add", "sub", "and", "or", "xor", "sll", "srl", "min", "max"};
+        static const char *const names[10] = {"add", "sub", "and", "or", "xor", "sll", "srl", "min", "max", "mul"};
         for (int i = 0; i < W; i++) {
             uint32_t x = (uint32_t)A[i], y = (uint32_t)B[i];
-            int32_t want[9] = {(int32_t)(x + y), (int32_t)(x - y), (int32_t)(x & y), (int32_t)(x | y), (int32_t)(x ^ y),
-                               (int32_t)(x << sh), (int32_t)(x >> sh), A[i] < B[i] ? A[i] : B[i], A[i] > B[i] ? A[i] : B[i]};
-            for (int o = 0; o < 9; o++)
+            int32_t want[10] = {(int32_t)(x + y), (int32_t)(x - y), (int32_t)(x & y), (int32_t)(x | y), (int32_t)(x ^ y),
+                                (int32_t)(x << sh), (int32_t)(x >> sh), A[i] < B[i] ? A[i] : B[i], A[i] > B[i] ? A[i] : B[i],
+                                (int32_t)(x * y)};
+            for (int o = 0; o < 10; o++)
                 if (R[o][i] != want[o]) simd_fail(c, "vi_%s(%d, %d%s) = %d, expected %d", names[o], A[i], o == 5 || o == 6 ? sh : B[i],
                                                   o == 5 || o == 6 ? " (shift)" : "", R[o][i], want[o]);
             if (((eq >> i) & 1) != (A[i] == B[i])) simd_fail(c, "vi_eq(%d, %d) = %u", A[i], B[i], (eq >> i) & 1);
@@ -712,4 +734,5 @@ void LANES_FN(test_simd_ops_run)(simd_ctx *c)
     test_reduce(c, &r);
     test_int(c, &r);
     test_convert(c, &r);
+    LANES_FN(test_simd_math_run)(c);
 }

@@ -3,6 +3,9 @@
  * counts the elements below a threshold and scales the rest, a full vector
  * at a time, the tail element by element. */
 #include <lanes/simd/simd.h>
+/* installed beside it, and compiled here with the consumer's flags */
+#include <lanes/simd/vmath.h>
+#include <lanes/simd/vrandom.h>
 
 #include <stddef.h>
 
