@@ -56,6 +56,26 @@ target_include_directories(test_simd_ops PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME kernels.simd_ops COMMAND test_simd_ops)
 list(APPEND lanes_kernel_tests kernels.simd_ops)
 
+# test_bsdf: the shaders' BSDFs (trace/kernels/bsdf_core.h), compiled once
+# per set like test_simd_ops, against the double references of
+# bsdf_reference.c: values, reciprocity, samples, albedo and chi-square.
+set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
+lanes_add_kernel_sets(test_bsdf_set
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_bsdf_set.c
+  SETS ${LANES_BUILT_ISAS}
+  LINK lanes_build_flags)
+set(lanes_bsdf_test_objects "${LANES_KERNEL_OBJECTS}")
+set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
+foreach(isa IN LISTS LANES_BUILT_ISAS)
+  target_include_directories(test_bsdf_set_${isa} PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+endforeach()
+add_executable(test_bsdf ${CMAKE_CURRENT_LIST_DIR}/test_bsdf.c ${CMAKE_CURRENT_LIST_DIR}/bsdf_reference.c
+               ${lanes_bsdf_test_objects})
+target_include_directories(test_bsdf PRIVATE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(test_bsdf PRIVATE lanes_internal)
+add_test(NAME kernels.bsdf COMMAND test_bsdf)
+list(APPEND lanes_kernel_tests kernels.bsdf)
+
 # The exact sign of t that decides the watertight test's hits at t ~ 0
 # (trace/kernels/exact_sign.h, plain C) against 128-bit integer arithmetic.
 add_executable(test_exact_sign ${CMAKE_CURRENT_LIST_DIR}/test_exact_sign.c)

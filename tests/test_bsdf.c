@@ -1,0 +1,443 @@
+/* The shaders' BSDFs (trace/kernels/bsdf_core.h) at every kernel set the
+ * CPU runs, against the double-precision references of bsdf_reference.c:
+ *   - eval and pdf within a stated relative error, on random directions
+ *     and parameters, both sides of the surface;
+ *   - reciprocity: f(wo, wi) = f(wi, wo);
+ *   - every sampled direction: unit length, on the right side, its pdf and
+ *     weight (f cos / pdf) those of the reference; glass by Snell's law;
+ *   - the sampler is unbiased: the mean weight equals the reference's
+ *     directional albedo (a quadrature), which is at most 1; glass
+ *     reflects with the Fresnel probability;
+ *   - the sampled directions follow the pdf: a chi-square test over a
+ *     grid of (cos theta, phi) bins, the expected counts integrated from
+ *     the reference pdf.
+ *
+ *   test_bsdf [--isa a,b,...] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bsdf_reference.h"
+#include "harness.h"
+#include "simd/isa.h"
+#include "test_bsdf.h"
+
+#define PI 3.14159265358979323846
+
+typedef void (*eval_fn)(const lanes_bsdf *, size_t, const float *, const float *, float *, float *);
+typedef void (*sample_fn)(const lanes_bsdf *, size_t, const float *, const float *, float *, float *, float *,
+                          uint8_t *);
+
+#include "test_bsdf_set_sets.h" /* TEST_BSDF_SET_SETS (generated) */
+
+#define DECLARE(id, name)                                                                                   \
+    void test_bsdf_eval_##name(const lanes_bsdf *, size_t, const float *, const float *, float *, float *); \
+    void test_bsdf_sample_##name(const lanes_bsdf *, size_t, const float *, const float *, float *, float *, \
+                                 float *, uint8_t *);
+TEST_BSDF_SET_SETS(DECLARE)
+#undef DECLARE
+
+static const struct {
+    eval_fn eval;
+    sample_fn sample;
+} sets[LANES_ISA_COUNT] = {
+#define ENTRY(id, name) [LANES_ISA_##id] = {test_bsdf_eval_##name, test_bsdf_sample_##name},
+    TEST_BSDF_SET_SETS(ENTRY)
+#undef ENTRY
+};
+
+/* The stated accuracy of eval, pdf and the sample weights against the
+ * reference: relative, with an absolute floor for values near 0. */
+#define REL_TOL 2e-4
+#define ABS_TOL 1e-6
+
+enum { N = 1 << 14 }; /* directions per batch, a multiple of 16 */
+
+static const char *const kind_names[] = {"lambert", "mirror", "conductor", "plastic", "glass"};
+
+typedef struct {
+    float wo[3 * N], wi[3 * N], u[3 * N], f[3 * N], pdf[N], weight[3 * N];
+    uint8_t flags[N];
+} batch;
+
+static void random_direction(harness_rng *r, double d[3])
+{
+    double z = 2.0 * harness_uniform(r) - 1.0, phi = 2.0 * PI * harness_uniform(r), s = sqrt(fmax(0.0, 1.0 - z * z));
+    d[0] = s * cos(phi), d[1] = s * sin(phi), d[2] = z;
+}
+
+static void put(float *soa, size_t i, const double d[3])
+{
+    for (int k = 0; k < 3; k++) soa[(size_t)k * N + i] = (float)d[k];
+}
+
+static void get(const float *soa, size_t i, double d[3])
+{
+    for (int k = 0; k < 3; k++) d[k] = soa[(size_t)k * N + i];
+}
+
+static lanes_bsdf random_bsdf(harness_rng *r, lanes_bsdf_kind kind)
+{
+    lanes_bsdf b = {.kind = kind};
+    for (int k = 0; k < 3; k++) b.albedo[k] = (float)harness_uniform(r), b.f0[k] = (float)harness_uniform(r);
+    b.roughness = (float)(0.05 + 0.95 * harness_uniform(r));
+    b.ior = (float)(1.1 + 1.4 * harness_uniform(r));
+    return b;
+}
+
+static bool near(double got, double want) { return fabs(got - want) <= REL_TOL * fabs(want) + ABS_TOL; }
+
+static double rel_err(double got, double want) { return fabs(got - want) / fmax(fabs(want), 1e-30); }
+
+/* ---- eval, pdf, reciprocity ------------------------------------------- */
+
+static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
+{
+    for (int kind = 0; kind <= LANES_BSDF_GLASS; kind++) {
+        double worst = 0.0;
+        for (int round = 0; round < 4; round++) {
+            lanes_bsdf b = random_bsdf(r, (lanes_bsdf_kind)kind);
+            for (size_t i = 0; i < N; i++) {
+                double wo[3], wi[3];
+                random_direction(r, wo);
+                random_direction(r, wi);
+                if (i % 2) {
+                    /* near the mirror direction, where a sharp lobe peaks */
+                    double e = pow(10.0, -4.0 * harness_uniform(r));
+                    for (int k = 0; k < 3; k++) wi[k] = (k < 2 ? -wo[k] : wo[k]) + e * wi[k];
+                    double len = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
+                    for (int k = 0; k < 3; k++) wi[k] /= len;
+                }
+                put(bt->wo, i, wo);
+                put(bt->wi, i, wi);
+            }
+            eval(&b, N, bt->wo, bt->wi, bt->f, bt->pdf);
+            for (size_t i = 0; i < N; i++) {
+                double wo[3], wi[3], f[3], pdf;
+                get(bt->wo, i, wo);
+                get(bt->wi, i, wi);
+                ref_bsdf_eval(&b, wo, wi, f, &pdf);
+                bool ok = near(bt->pdf[i], pdf);
+                for (int k = 0; k < 3; k++) ok = ok && near(bt->f[(size_t)k * N + i], f[k]);
+                if (!CHECK(ok, "%s %s (roughness %g): f(wo (%g %g %g), wi (%g %g %g)) = %g %g %g pdf %g, reference %g %g %g pdf %g",
+                           isa, kind_names[kind], (double)b.roughness, wo[0], wo[1], wo[2], wi[0], wi[1], wi[2],
+                           (double)bt->f[i], (double)bt->f[N + i], (double)bt->f[2 * N + i], (double)bt->pdf[i], f[0],
+                           f[1], f[2], pdf))
+                    continue;
+                if (f[0] > 1e-3) worst = fmax(worst, rel_err(bt->f[i], f[0]));
+            }
+            /* reciprocity: the same call with the directions swapped */
+            memcpy(bt->u, bt->f, sizeof bt->f); /* keep f(wo, wi) */
+            eval(&b, N, bt->wi, bt->wo, bt->f, bt->pdf);
+            for (size_t i = 0; i < 3 * N; i++) {
+                double wo[3], wi[3];
+                get(bt->wo, i % N, wo);
+                get(bt->wi, i % N, wi);
+                CHECK(near(bt->f[i], bt->u[i]), "%s %s (roughness %g): f(wi, wo) = %g, f(wo, wi) = %g, wo (%a %a %a) wi (%a %a %a)",
+                      isa, kind_names[kind], (double)b.roughness, (double)bt->f[i], (double)bt->u[i], wo[0], wo[1], wo[2],
+                      wi[0], wi[1], wi[2]);
+            }
+        }
+        printf("  %s %s: eval worst relative error %.2g (stated %.0e)\n", isa, kind_names[kind], worst, REL_TOL);
+    }
+}
+
+/* ---- samples: each one, and the sampler's mean ------------------------- */
+
+static void sample_batch(sample_fn sample, batch *bt, const lanes_bsdf *b, const double wo[3], harness_rng *r)
+{
+    for (size_t i = 0; i < N; i++) {
+        put(bt->wo, i, wo);
+        for (int k = 0; k < 3; k++) bt->u[(size_t)k * N + i] = (float)(harness_next(r) >> 40) * 0x1p-24f;
+    }
+    sample(b, N, bt->wo, bt->u, bt->wi, bt->weight, bt->pdf, bt->flags);
+}
+
+/* Checks every sample of a batch for wo against the reference. */
+static void check_samples(const char *isa, const lanes_bsdf *b, const batch *bt)
+{
+    for (size_t i = 0; i < N; i++) {
+        double wo[3], wi[3], f[3], pdf; /* the directions as the set saw them, in float */
+        get(bt->wo, i, wo);
+        get(bt->wi, i, wi);
+        bool valid = bt->flags[i] & TEST_BSDF_VALID, delta = bt->flags[i] & TEST_BSDF_DELTA;
+        bool is_delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
+        if (!CHECK(delta == is_delta, "%s %s: delta flag %d", isa, kind_names[b->kind], delta)) continue;
+        if (!valid) {
+            CHECK(!is_delta, "%s %s: a delta sample marked invalid", isa, kind_names[b->kind]);
+            continue;
+        }
+        double len = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
+        if (!CHECK(fabs(len - 1.0) < 1e-5, "%s %s: |wi| = %.9f", isa, kind_names[b->kind], len)) continue;
+        if (is_delta) {
+            for (int k = 0; k < 3; k++)
+                CHECK(bt->weight[(size_t)k * N + i] == b->albedo[k], "%s %s: delta weight %g, albedo %g", isa,
+                      kind_names[b->kind], (double)bt->weight[(size_t)k * N + i], (double)b->albedo[k]);
+            bool reflected = wi[2] * wo[2] > 0.0;
+            if (reflected || b->kind == LANES_BSDF_MIRROR) {
+                CHECK(near(wi[0], -wo[0]) && near(wi[1], -wo[1]) && near(wi[2], wo[2]),
+                      "%s %s: reflection of (%g %g %g) is (%g %g %g)", isa, kind_names[b->kind], wo[0], wo[1], wo[2],
+                      wi[0], wi[1], wi[2]);
+            } else {
+                /* Snell: eta_i sin_i = eta_t sin_t, in the plane of incidence */
+                double eta_i = wo[2] > 0.0 ? 1.0 : b->ior, eta_t = wo[2] > 0.0 ? b->ior : 1.0;
+                double sin_i = sqrt(wo[0] * wo[0] + wo[1] * wo[1]), sin_t = sqrt(wi[0] * wi[0] + wi[1] * wi[1]);
+                CHECK(fabs(eta_i * sin_i - eta_t * sin_t) < 1e-5 && wi[0] * wo[0] + wi[1] * wo[1] <= 0.0,
+                      "%s glass (ior %g): (%g %g %g) refracted to (%g %g %g)", isa, (double)b->ior, wo[0], wo[1],
+                      wo[2], wi[0], wi[1], wi[2]);
+                CHECK(ref_dielectric_fresnel(fabs(wo[2]), eta_i, eta_t) < 1.0,
+                      "%s glass: refraction beyond the critical angle", isa);
+            }
+            continue;
+        }
+        if (!CHECK(wi[2] * wo[2] > 0.0, "%s %s: sampled wi on the other side", isa, kind_names[b->kind])) continue;
+        ref_bsdf_eval(b, wo, wi, f, &pdf);
+        CHECK(near(bt->pdf[i], pdf), "%s %s (roughness %g): sample pdf %g, reference %g", isa, kind_names[b->kind],
+              (double)b->roughness, (double)bt->pdf[i], pdf);
+        for (int k = 0; k < 3; k++) {
+            double want = f[k] * fabs(wi[2]) / pdf, got = bt->weight[(size_t)k * N + i];
+            CHECK(fabs(got - want) <= 4 * REL_TOL * want + ABS_TOL, "%s %s: weight %g, reference f cos / pdf %g", isa,
+                  kind_names[b->kind], got, want);
+        }
+    }
+}
+
+/* The directional albedo: the integral of f cos over the sphere, by the
+ * midpoint rule in (theta, phi), fine in theta (a lobe of roughness 0.3
+ * spans about 0.2 radians; a grid even in cos theta resolved it poorly at
+ * normal incidence, off by 0.3%), channel 0. */
+static double albedo_quadrature(const lanes_bsdf *b, const double wo[3])
+{
+    enum { T = 1500, P = 400 };
+    double sum = 0.0;
+    for (int i = 0; i < T; i++) {
+        double th = PI * (i + 0.5) / T, z = cos(th), s = sin(th), row = 0.0;
+        for (int j = 0; j < P; j++) {
+            double phi = 2.0 * PI * (j + 0.5) / P;
+            double wi[3] = {s * cos(phi), s * sin(phi), z}, f[3], pdf;
+            ref_bsdf_eval(b, wo, wi, f, &pdf);
+            row += f[0] * fabs(z);
+        }
+        sum += row * s;
+    }
+    return sum * (PI / T) * (2.0 * PI / P);
+}
+
+static void test_sampling(const char *isa, sample_fn sample, batch *bt, harness_rng *r)
+{
+    /* every sample, random parameters and directions */
+    for (int kind = 0; kind <= LANES_BSDF_GLASS; kind++)
+        for (int round = 0; round < 8; round++) {
+            lanes_bsdf b = random_bsdf(r, (lanes_bsdf_kind)kind);
+            double wo[3];
+            random_direction(r, wo);
+            sample_batch(sample, bt, &b, wo, r);
+            check_samples(isa, &b, bt);
+        }
+
+    /* unbiased, and at most 1, for white surfaces at three angles */
+    static const lanes_bsdf_kind kinds[] = {LANES_BSDF_LAMBERT, LANES_BSDF_CONDUCTOR, LANES_BSDF_PLASTIC};
+    static const float roughness[] = {0.3f, 0.7f};
+    static const double angles[] = {0.0, 45.0, 80.0};
+    for (size_t k = 0; k < 3; k++)
+        for (size_t g = 0; g < 2; g++)
+            for (size_t a = 0; a < 3; a++) {
+                lanes_bsdf b = {.kind = kinds[k], .albedo = {1, 1, 1}, .f0 = {1, 1, 1}, .roughness = roughness[g]};
+                double t = angles[a] * PI / 180.0, wo[3] = {sin(t), 0.0, cos(t)};
+                double sum = 0.0, sum2 = 0.0;
+                for (int rep = 0; rep < 8; rep++) {
+                    sample_batch(sample, bt, &b, wo, r);
+                    for (size_t i = 0; i < N; i++) sum += bt->weight[i], sum2 += (double)bt->weight[i] * bt->weight[i];
+                }
+                double n = 8.0 * N, mean = sum / n, sd = sqrt(fmax(0.0, sum2 / n - mean * mean) / n);
+                /* the same for every set: integrated once */
+                static double cached[3][2][3];
+                if (cached[k][g][a] == 0.0) cached[k][g][a] = albedo_quadrature(&b, wo);
+                double want = cached[k][g][a];
+                CHECK(want <= 1.0 + 1e-3, "%s %s (roughness %g) at %g degrees: albedo %.5f above 1", isa,
+                      kind_names[b.kind], (double)b.roughness, angles[a], want);
+                CHECK(fabs(mean - want) <= 5.0 * sd + 2e-3,
+                      "%s %s (roughness %g) at %g degrees: mean weight %.5f +- %.5f, albedo %.5f", isa,
+                      kind_names[b.kind], (double)b.roughness, angles[a], mean, sd, want);
+            }
+
+    /* glass reflects with the Fresnel probability, from outside and inside */
+    static const double glass_angles[] = {10.0, 60.0, 85.0, 170.0, 140.0};
+    for (size_t a = 0; a < sizeof glass_angles / sizeof glass_angles[0]; a++) {
+        lanes_bsdf b = {.kind = LANES_BSDF_GLASS, .albedo = {1, 1, 1}, .ior = 1.5f};
+        double t = glass_angles[a] * PI / 180.0, wo[3] = {sin(t), 0.0, cos(t)};
+        sample_batch(sample, bt, &b, wo, r);
+        long reflected = 0;
+        for (size_t i = 0; i < N; i++) reflected += bt->wi[2 * N + i] * wo[2] > 0.0;
+        double outside = wo[2] > 0.0;
+        double p = ref_dielectric_fresnel(fabs(wo[2]), outside ? 1.0 : 1.5, outside ? 1.5 : 1.0);
+        double sd = sqrt(p * (1.0 - p) / N);
+        CHECK(fabs((double)reflected / N - p) <= 5.0 * sd + 1e-9, "%s glass at %g degrees: reflected %.4f, Fresnel %.4f",
+              isa, glass_angles[a], (double)reflected / N, p);
+    }
+}
+
+/* ---- chi-square of the sampled directions ------------------------------ */
+
+/* Q(a, x), the regularized upper incomplete gamma function: the p-value of
+ * a chi-square statistic x2 with d degrees of freedom is Q(d/2, x2/2). */
+static double gamma_q(double a, double x)
+{
+    if (x <= 0.0) return 1.0;
+    double front = exp(-x + a * log(x) - lgamma(a));
+    if (x < a + 1.0) {
+        double term = 1.0 / a, sum = term;
+        for (int n = 1; n < 10000 && term > sum * 1e-16; n++) {
+            term *= x / (a + n);
+            sum += term;
+        }
+        return 1.0 - front * sum;
+    }
+    /* continued fraction, by Lentz's method */
+    double b = x + 1.0 - a, c = 1e300, d = 1.0 / b, h = d;
+    for (int i = 1; i < 10000; i++) {
+        double an = -i * (i - a);
+        b += 2.0;
+        d = an * d + b;
+        if (fabs(d) < 1e-300) d = 1e-300;
+        c = b + an / c;
+        if (fabs(c) < 1e-300) c = 1e-300;
+        d = 1.0 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1.0) < 1e-16) break;
+    }
+    return front * h;
+}
+
+enum { ZB = 16, PB = 32, SUB = 4, ROUNDS = 16 };
+
+static void chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng *r, lanes_bsdf b, double theta)
+{
+    double t = theta * PI / 180.0, wo[3] = {sin(t), 0.0, cos(t)};
+    static double expected[ZB * PB + 1];
+    static long observed[ZB * PB + 1];
+    memset(observed, 0, sizeof observed);
+    /* bins over the upper hemisphere in (z, phi), and one for no direction */
+    double total = 0.0;
+    for (int i = 0; i < ZB; i++)
+        for (int j = 0; j < PB; j++) {
+            double sum = 0.0;
+            for (int si = 0; si < SUB; si++)
+                for (int sj = 0; sj < SUB; sj++) {
+                    double z = (i + (si + 0.5) / SUB) / ZB, phi = 2.0 * PI * (j + (sj + 0.5) / SUB) / PB;
+                    double s = sqrt(1.0 - z * z), wi[3] = {s * cos(phi), s * sin(phi), z}, f[3], pdf;
+                    ref_bsdf_eval(&b, wo, wi, f, &pdf);
+                    sum += pdf;
+                }
+            expected[i * PB + j] = sum / (SUB * SUB) * (1.0 / ZB) * (2.0 * PI / PB);
+            total += expected[i * PB + j];
+        }
+    expected[ZB * PB] = fmax(0.0, 1.0 - total);
+    for (int round = 0; round < ROUNDS; round++) {
+        sample_batch(sample, bt, &b, wo, r);
+        for (size_t i = 0; i < N; i++) {
+            if (!(bt->flags[i] & TEST_BSDF_VALID)) {
+                observed[ZB * PB]++;
+                continue;
+            }
+            double z = bt->wi[2 * N + i], phi = atan2(bt->wi[N + i], bt->wi[i]);
+            if (phi < 0.0) phi += 2.0 * PI;
+            int zi = (int)(z * ZB), pj = (int)(phi / (2.0 * PI) * PB);
+            zi = zi < 0 ? 0 : zi >= ZB ? ZB - 1 : zi;
+            pj = pj < 0 ? 0 : pj >= PB ? PB - 1 : pj;
+            observed[zi * PB + pj]++;
+        }
+    }
+    /* bins expecting fewer than 5 samples pooled into one */
+    const double n = (double)ROUNDS * N;
+    double chi2 = 0.0, pool_e = 0.0;
+    long pool_o = 0;
+    int bins = 0;
+    for (int k = 0; k <= ZB * PB; k++) {
+        double e = expected[k] * n;
+        if (e < 5.0) {
+            pool_e += e, pool_o += observed[k];
+            continue;
+        }
+        chi2 += (observed[k] - e) * (observed[k] - e) / e;
+        bins++;
+    }
+    if (pool_e > 0.0) {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / fmax(pool_e, 1.0);
+        bins++;
+    }
+    double p = gamma_q((bins - 1) / 2.0, chi2 / 2.0);
+    printf("  %s %s (roughness %.1f) at %.0f degrees: chi-square %.1f over %d bins, p = %.3f\n", isa,
+           kind_names[b.kind], (double)b.roughness, theta, chi2, bins, p);
+    /* about twenty such tests per set: 1e-3 each keeps a correct sampler's
+     * chance of failing one low, and a wrong pdf gives p ~ 0 */
+    CHECK(p > 1e-3, "%s %s (roughness %g) at %g degrees: the sampled directions do not follow the pdf (p = %.2g)",
+          isa, kind_names[b.kind], (double)b.roughness, theta, p);
+}
+
+static void test_chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng *r)
+{
+    static const double thetas[] = {30.0, 75.0};
+    for (size_t a = 0; a < 2; a++) {
+        chi_square(isa, sample, bt, r, (lanes_bsdf){.kind = LANES_BSDF_LAMBERT, .albedo = {0.8f, 0.5f, 0.2f}},
+                   thetas[a]);
+        chi_square(isa, sample, bt, r,
+                   (lanes_bsdf){.kind = LANES_BSDF_CONDUCTOR, .f0 = {0.9f, 0.6f, 0.3f}, .roughness = 0.4f}, thetas[a]);
+        chi_square(isa, sample, bt, r,
+                   (lanes_bsdf){.kind = LANES_BSDF_CONDUCTOR, .f0 = {0.9f, 0.6f, 0.3f}, .roughness = 0.8f}, thetas[a]);
+        chi_square(isa, sample, bt, r,
+                   (lanes_bsdf){.kind = LANES_BSDF_PLASTIC, .albedo = {0.2f, 0.5f, 0.8f}, .roughness = 0.5f}, thetas[a]);
+    }
+}
+
+static bool in_list(const char *list, const char *name)
+{
+    if (!list) return true;
+    size_t len = strlen(name);
+    for (const char *p = list; *p;) {
+        const char *e = strchr(p, ',');
+        size_t l = e ? (size_t)(e - p) : strlen(p);
+        if (l == len && strncmp(p, name, len) == 0) return true;
+        if (!e) break;
+        p = e + 1;
+    }
+    return false;
+}
+
+int main(int argc, char **argv)
+{
+    const char *isa_list = NULL;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--isa") == 0 && i + 1 < argc) {
+            isa_list = argv[++i];
+        } else {
+            fprintf(stderr, "usage: %s [--isa a,b,...]\n  sets: %s\n", argv[0], lanes_isa_all_names());
+            return 2;
+        }
+    }
+    batch *bt = malloc(sizeof *bt);
+    if (!bt) {
+        fprintf(stderr, "test_bsdf: out of memory\n");
+        return 2;
+    }
+    printf("test_bsdf: CPU %s\n", lanes_cpu()->brand);
+    for (int i = 0; i < LANES_ISA_COUNT; i++) {
+        lanes_isa isa = (lanes_isa)i;
+        const char *name = lanes_isa_name(isa);
+        if (!in_list(isa_list, name) || !sets[i].eval || !lanes_isa_compiled(isa)) continue;
+        if (!lanes_isa_cpu_can_run(isa)) {
+            printf("SKIP %s: this CPU cannot run it\n", name);
+            harness_skip();
+            continue;
+        }
+        /* the same seed for every set: the sets see the same directions */
+        harness_rng r = harness_rng_seed(0xb5df);
+        test_eval(name, sets[i].eval, bt, &r);
+        test_sampling(name, sets[i].sample, bt, &r);
+        test_chi_square(name, sets[i].sample, bt, &r);
+    }
+    free(bt);
+    return harness_summary("test_bsdf");
+}
