@@ -76,6 +76,25 @@ target_link_libraries(test_bsdf PRIVATE lanes_internal)
 add_test(NAME kernels.bsdf COMMAND test_bsdf)
 list(APPEND lanes_kernel_tests kernels.bsdf)
 
+# test_textures: the solid procedural textures (trace/kernels/texture_core.h),
+# per set, against the double reference of texture_reference.c.
+set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
+lanes_add_kernel_sets(test_textures_set
+  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_textures_set.c
+  SETS ${LANES_BUILT_ISAS}
+  LINK lanes_build_flags)
+set(lanes_textures_test_objects "${LANES_KERNEL_OBJECTS}")
+set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
+foreach(isa IN LISTS LANES_BUILT_ISAS)
+  target_include_directories(test_textures_set_${isa} PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+endforeach()
+add_executable(test_textures ${CMAKE_CURRENT_LIST_DIR}/test_textures.c ${CMAKE_CURRENT_LIST_DIR}/texture_reference.c
+               ${lanes_textures_test_objects})
+target_include_directories(test_textures PRIVATE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(test_textures PRIVATE lanes_internal)
+add_test(NAME kernels.textures COMMAND test_textures)
+list(APPEND lanes_kernel_tests kernels.textures)
+
 # The exact sign of t that decides the watertight test's hits at t ~ 0
 # (trace/kernels/exact_sign.h, plain C) against 128-bit integer arithmetic.
 add_executable(test_exact_sign ${CMAKE_CURRENT_LIST_DIR}/test_exact_sign.c)
