@@ -58,3 +58,9 @@ add_test(NAME render.scale_sweep COMMAND test_scale_sweep ${CMAKE_CURRENT_BINARY
 set_tests_properties(render.scale_sweep PROPERTIES
   LABELS render TIMEOUT 600
   ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
+# The stream renderer's material sort and shading utilisation.
+add_executable(test_material_sort ${CMAKE_CURRENT_LIST_DIR}/test_material_sort.c)
+target_link_libraries(test_material_sort PRIVATE lanes_render)
+target_include_directories(test_material_sort PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+add_test(NAME render.material_sort COMMAND test_material_sort)
+set_tests_properties(render.material_sort PROPERTIES LABELS render TIMEOUT 60)
