@@ -56,41 +56,20 @@ target_include_directories(test_simd_ops PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME kernels.simd_ops COMMAND test_simd_ops)
 list(APPEND lanes_kernel_tests kernels.simd_ops)
 
-# test_bsdf: the shaders' BSDFs (trace/kernels/bsdf_core.h), compiled once
-# per set like test_simd_ops, against the double references of
-# bsdf_reference.c: values, reciprocity, samples, albedo and chi-square.
-set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
-lanes_add_kernel_sets(test_bsdf_set
-  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_bsdf_set.c
-  SETS ${LANES_BUILT_ISAS}
-  LINK lanes_build_flags)
-set(lanes_bsdf_test_objects "${LANES_KERNEL_OBJECTS}")
-set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
-foreach(isa IN LISTS LANES_BUILT_ISAS)
-  target_include_directories(test_bsdf_set_${isa} PRIVATE ${CMAKE_CURRENT_LIST_DIR})
-endforeach()
-add_executable(test_bsdf ${CMAKE_CURRENT_LIST_DIR}/test_bsdf.c ${CMAKE_CURRENT_LIST_DIR}/bsdf_reference.c
-               ${lanes_bsdf_test_objects})
-target_include_directories(test_bsdf PRIVATE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_LIST_DIR})
+# test_bsdf: the shaders' BSDFs (the bsdf kernels, trace/kernels/bsdf_core.h)
+# at every set, against the double references of bsdf_reference.c: values,
+# reciprocity, samples, albedo and chi-square.
+add_executable(test_bsdf ${CMAKE_CURRENT_LIST_DIR}/test_bsdf.c ${CMAKE_CURRENT_LIST_DIR}/bsdf_reference.c)
+target_include_directories(test_bsdf PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(test_bsdf PRIVATE lanes_internal)
 add_test(NAME kernels.bsdf COMMAND test_bsdf)
 list(APPEND lanes_kernel_tests kernels.bsdf)
 
-# test_textures: the solid procedural textures (trace/kernels/texture_core.h),
-# per set, against the double reference of texture_reference.c.
-set(lanes_saved_kernel_objects "${LANES_KERNEL_OBJECTS}")
-lanes_add_kernel_sets(test_textures_set
-  SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_textures_set.c
-  SETS ${LANES_BUILT_ISAS}
-  LINK lanes_build_flags)
-set(lanes_textures_test_objects "${LANES_KERNEL_OBJECTS}")
-set(LANES_KERNEL_OBJECTS "${lanes_saved_kernel_objects}")
-foreach(isa IN LISTS LANES_BUILT_ISAS)
-  target_include_directories(test_textures_set_${isa} PRIVATE ${CMAKE_CURRENT_LIST_DIR})
-endforeach()
-add_executable(test_textures ${CMAKE_CURRENT_LIST_DIR}/test_textures.c ${CMAKE_CURRENT_LIST_DIR}/texture_reference.c
-               ${lanes_textures_test_objects})
-target_include_directories(test_textures PRIVATE ${CMAKE_CURRENT_BINARY_DIR} ${CMAKE_CURRENT_LIST_DIR})
+# test_textures: the solid procedural textures (the texture_color and noise
+# kernels, trace/kernels/texture_core.h) at every set, against the double
+# reference of texture_reference.c.
+add_executable(test_textures ${CMAKE_CURRENT_LIST_DIR}/test_textures.c ${CMAKE_CURRENT_LIST_DIR}/texture_reference.c)
+target_include_directories(test_textures PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(test_textures PRIVATE lanes_internal)
 add_test(NAME kernels.textures COMMAND test_textures)
 list(APPEND lanes_kernel_tests kernels.textures)

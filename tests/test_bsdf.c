@@ -21,7 +21,7 @@
 #include "bsdf_reference.h"
 #include "harness.h"
 #include "simd/isa.h"
-#include "test_bsdf.h"
+#include "trace/kernels.h"
 
 #define PI 3.14159265358979323846
 
@@ -29,30 +29,12 @@ typedef void (*eval_fn)(const lanes_bsdf *, size_t, const float *, const float *
 typedef void (*sample_fn)(const lanes_bsdf *, size_t, const float *, const float *, float *, float *, float *,
                           uint8_t *);
 
-#include "test_bsdf_set_sets.h" /* TEST_BSDF_SET_SETS (generated) */
-
-#define DECLARE(id, name)                                                                                   \
-    void test_bsdf_eval_##name(const lanes_bsdf *, size_t, const float *, const float *, float *, float *); \
-    void test_bsdf_sample_##name(const lanes_bsdf *, size_t, const float *, const float *, float *, float *, \
-                                 float *, uint8_t *);
-TEST_BSDF_SET_SETS(DECLARE)
-#undef DECLARE
-
-static const struct {
-    eval_fn eval;
-    sample_fn sample;
-} sets[LANES_ISA_COUNT] = {
-#define ENTRY(id, name) [LANES_ISA_##id] = {test_bsdf_eval_##name, test_bsdf_sample_##name},
-    TEST_BSDF_SET_SETS(ENTRY)
-#undef ENTRY
-};
-
 /* The stated accuracy of eval, pdf and the sample weights against the
  * reference: relative, with an absolute floor for values near 0. */
 #define REL_TOL 2e-4
 #define ABS_TOL 1e-6
 
-enum { N = 1 << 14 }; /* directions per batch, a multiple of 16 */
+enum { N = 1 << 14 }; /* directions per batch */
 
 static const char *const kind_names[] = {"lambert", "mirror", "conductor", "plastic", "glass"};
 
@@ -161,7 +143,7 @@ static void check_samples(const char *isa, const lanes_bsdf *b, const batch *bt)
         double wo[3], wi[3], f[3], pdf; /* the directions as the set saw them, in float */
         get(bt->wo, i, wo);
         get(bt->wi, i, wi);
-        bool valid = bt->flags[i] & TEST_BSDF_VALID, delta = bt->flags[i] & TEST_BSDF_DELTA;
+        bool valid = bt->flags[i] & LANES_BSDF_VALID, delta = bt->flags[i] & LANES_BSDF_DELTA;
         bool is_delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
         if (!CHECK(delta == is_delta, "%s %s: delta flag %d", isa, kind_names[b->kind], delta)) continue;
         if (!valid) {
@@ -338,7 +320,7 @@ static void chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng
     for (int round = 0; round < ROUNDS; round++) {
         sample_batch(sample, bt, &b, wo, r);
         for (size_t i = 0; i < N; i++) {
-            if (!(bt->flags[i] & TEST_BSDF_VALID)) {
+            if (!(bt->flags[i] & LANES_BSDF_VALID)) {
                 observed[ZB * PB]++;
                 continue;
             }
@@ -392,6 +374,41 @@ static void test_chi_square(const char *isa, sample_fn sample, batch *bt, harnes
     }
 }
 
+/* Calls on n items that fill no whole vector at the end: each item as in
+ * a full call, nothing written past n. */
+static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r)
+{
+    enum { M = 37, GUARD = 16 };
+    static float wo[3 * M], wi[3 * M], u[3 * M], f[3 * M + GUARD], pdf[M + GUARD], w2[3 * M + GUARD];
+    static uint8_t flags[M + GUARD];
+    lanes_bsdf b = random_bsdf(r, LANES_BSDF_PLASTIC);
+    for (size_t i = 0; i < M; i++) {
+        double d[3];
+        random_direction(r, d);
+        for (int c = 0; c < 3; c++) wo[c * M + i] = (float)d[c], u[c * M + i] = (float)harness_uniform(r);
+        random_direction(r, d);
+        for (int c = 0; c < 3; c++) wi[c * M + i] = (float)d[c];
+    }
+    for (size_t n = 1; n <= M; n += 6) {
+        for (size_t i = 0; i < 3 * M + GUARD; i++) f[i] = w2[i] = -7.0f;
+        for (size_t i = 0; i < M + GUARD; i++) pdf[i] = -7.0f, flags[i] = 0xee;
+        /* the first n items, their components n apart */
+        float o[3 * M], v[3 * M], uu[3 * M];
+        for (int c = 0; c < 3; c++)
+            for (size_t i = 0; i < n; i++) o[c * n + i] = wo[c * M + i], v[c * n + i] = wi[c * M + i], uu[c * n + i] = u[c * M + i];
+        k->bsdf_eval(&b, n, o, v, f, pdf);
+        for (size_t i = 0; i < n; i++) {
+            double dwo[3] = {o[i], o[n + i], o[2 * n + i]}, dwi[3] = {v[i], v[n + i], v[2 * n + i]}, ff[3], pp;
+            ref_bsdf_eval(&b, dwo, dwi, ff, &pp);
+            CHECK(near(f[i], ff[0]) && near(f[2 * n + i], ff[2]) && near(pdf[i], pp), "%s: bsdf_eval of %zu items, item %zu", isa, n, i);
+        }
+        CHECK(f[3 * n] == -7.0f && pdf[n] == -7.0f, "%s: bsdf_eval of %zu items wrote past them", isa, n);
+        k->bsdf_sample(&b, n, o, uu, w2, f, pdf, flags);
+        CHECK(w2[3 * n] == -7.0f && f[3 * n] == -7.0f && pdf[n] == -7.0f && flags[n] == 0xee,
+              "%s: bsdf_sample of %zu items wrote past them", isa, n);
+    }
+}
+
 static bool in_list(const char *list, const char *name)
 {
     if (!list) return true;
@@ -426,7 +443,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
         const char *name = lanes_isa_name(isa);
-        if (!in_list(isa_list, name) || !sets[i].eval || !lanes_isa_compiled(isa)) continue;
+        if (!in_list(isa_list, name) || !lanes_isa_compiled(isa)) continue;
         if (!lanes_isa_cpu_can_run(isa)) {
             printf("SKIP %s: this CPU cannot run it\n", name);
             harness_skip();
@@ -434,9 +451,11 @@ int main(int argc, char **argv)
         }
         /* the same seed for every set: the sets see the same directions */
         harness_rng r = harness_rng_seed(0xb5df);
-        test_eval(name, sets[i].eval, bt, &r);
-        test_sampling(name, sets[i].sample, bt, &r);
-        test_chi_square(name, sets[i].sample, bt, &r);
+        const lanes_kernels *k = lanes_kernels_for(isa);
+        test_eval(name, k->bsdf_eval, bt, &r);
+        test_sampling(name, k->bsdf_sample, bt, &r);
+        test_chi_square(name, k->bsdf_sample, bt, &r);
+        test_tail(name, k, &r);
     }
     free(bt);
     return harness_summary("test_bsdf");

@@ -16,30 +16,11 @@
 
 #include "harness.h"
 #include "simd/isa.h"
-#include "test_textures.h"
+#include "trace/kernels.h"
 #include "texture_reference.h"
 
-typedef void (*noise_fn)(size_t, const float *, const float *, const float *, float *);
-typedef void (*texture_fn)(const lanes_texture *, size_t, const float *, const float *, const float *, float *,
-                           float *);
-
-#include "test_textures_set_sets.h" /* TEST_TEXTURES_SET_SETS (generated) */
-
-#define DECLARE(id, name)                                                                       \
-    void test_noise_##name(size_t, const float *, const float *, const float *, float *);       \
-    void test_texture_##name(const lanes_texture *, size_t, const float *, const float *, const float *, \
-                             float *, float *);
-TEST_TEXTURES_SET_SETS(DECLARE)
-#undef DECLARE
-
-static const struct {
-    noise_fn noise;
-    texture_fn texture;
-} sets[LANES_ISA_COUNT] = {
-#define ENTRY(id, name) [LANES_ISA_##id] = {test_noise_##name, test_texture_##name},
-    TEST_TEXTURES_SET_SETS(ENTRY)
-#undef ENTRY
-};
+typedef void (*noise_fn)(size_t, const float *, float *);
+typedef void (*texture_fn)(const lanes_texture *, size_t, const float *, float *, float *);
 
 enum { N = 1 << 14 };
 
@@ -52,7 +33,9 @@ enum { N = 1 << 14 };
 
 static const char *const kind_names[] = {"checker", "noise", "marble", "wood"};
 
-static float x[N], y[N], z[N], out[N], color[3 * N];
+/* points in SoA form, as the kernels take them */
+static float p[3 * N], out[N], color[3 * N];
+static float *const x = p, *const y = p + N, *const z = p + 2 * N;
 
 static float coordinate(harness_rng *r, double range) { return (float)((2.0 * harness_uniform(r) - 1.0) * range); }
 
@@ -62,7 +45,7 @@ static void test_noise(const char *isa, noise_fn noise, harness_rng *r)
     for (int round = 0; round < 16; round++) {
         double range = round < 8 ? 4.0 : 1000.0;
         for (size_t i = 0; i < N; i++) x[i] = coordinate(r, range), y[i] = coordinate(r, range), z[i] = coordinate(r, range);
-        noise(N, x, y, z, out);
+        noise(N, p, out);
         for (size_t i = 0; i < N; i++) {
             double want = ref_noise(x[i], y[i], z[i]);
             worst = fmax(worst, fabs(out[i] - want));
@@ -75,15 +58,15 @@ static void test_noise(const char *isa, noise_fn noise, harness_rng *r)
         x[i] = (float)((int)(harness_next(r) % 200) - 100), y[i] = (float)((int)(harness_next(r) % 200) - 100);
         z[i] = (float)((int)(harness_next(r) % 200) - 100);
     }
-    noise(N, x, y, z, out);
+    noise(N, p, out);
     for (size_t i = 0; i < N; i++)
         CHECK(out[i] == 0.0f, "%s noise at the lattice point (%g, %g, %g) = %g", isa, (double)x[i], (double)y[i],
               (double)z[i], (double)out[i]);
     static float below[N];
     for (size_t i = 0; i < N; i++) y[i] += 0.37f, z[i] += 0.61f;
-    noise(N, x, y, z, out);
+    noise(N, p, out);
     for (size_t i = 0; i < N; i++) x[i] = nextafterf(x[i], -INFINITY);
-    noise(N, x, y, z, below);
+    noise(N, p, below);
     for (size_t i = 0; i < N; i++)
         CHECK(fabsf(out[i] - below[i]) <= 1e-5f, "%s noise jumps across the face x = %g: %g against %g", isa,
               (double)x[i], (double)out[i], (double)below[i]);
@@ -103,7 +86,7 @@ static void test_texture(const char *isa, texture_fn texture, harness_rng *r)
                 double range = 100.0 * t.scale;
                 x[i] = coordinate(r, range), y[i] = coordinate(r, range), z[i] = coordinate(r, range);
             }
-            texture(&t, N, x, y, z, out, color);
+            texture(&t, N, p, out, color);
             const float k = 1.0f / t.scale;
             for (size_t i = 0; i < N; i++) {
                 /* the point as the set scales it, then in double */
@@ -162,15 +145,16 @@ int main(int argc, char **argv)
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
         const char *name = lanes_isa_name(isa);
-        if (!in_list(isa_list, name) || !sets[i].noise || !lanes_isa_compiled(isa)) continue;
+        if (!in_list(isa_list, name) || !lanes_isa_compiled(isa)) continue;
         if (!lanes_isa_cpu_can_run(isa)) {
             printf("SKIP %s: this CPU cannot run it\n", name);
             harness_skip();
             continue;
         }
         harness_rng r = harness_rng_seed(0x7e57u);
-        test_noise(name, sets[i].noise, &r);
-        test_texture(name, sets[i].texture, &r);
+        const lanes_kernels *k = lanes_kernels_for(isa);
+        test_noise(name, k->noise, &r);
+        test_texture(name, k->texture_color, &r);
     }
     return harness_summary("test_textures");
 }

@@ -32,6 +32,10 @@ typedef struct lanes_bsdf {
 /* The coat's reflectance at normal incidence (ior 1.5: ((1.5 - 1) / 2.5)^2). */
 #define LANES_BSDF_COAT_F0 0.04f
 
+/* bsdf_sample's flags per direction: a direction was made; it is a delta
+ * lobe's (its weight replaces f cos / pdf, and its pdf is 0). */
+enum { LANES_BSDF_VALID = 1, LANES_BSDF_DELTA = 2 };
+
 /* The probability that a plastic sample takes the coat's lobe (else the
  * diffuse base); the pdf is the mixture, so any value in (0, 1) is right. */
 #define LANES_BSDF_COAT_PICK 0.5f

@@ -146,6 +146,26 @@
        uint32_t *prim, float *u, float *v, uint8_t *occluded, lanes_packet_stats *stats),  \
       (b, opt, rays, prim, u, v, occluded))
 
+/* shade_kernels.c: the shaders' building blocks on n items in SoA form
+ * (component k of item i at p[k * n + i]), any n; parameters uniform over
+ * the call (one material). See trace/bsdf.h and trace/texture.h.
+ * bsdf_eval: f (3 channels) and the sampling pdf for directions wo, wi.
+ * bsdf_sample: a direction wi for each wo from u (3 numbers in [0, 1) per
+ *   item), its weight f cos / pdf (3), pdf, and flags (LANES_BSDF_VALID,
+ *   LANES_BSDF_DELTA).
+ * texture_color: the texture's blend weight and color (3) at points p.
+ * noise: gradient noise in [-1, 1] at points p. */
+#define LANES_KERNELS_SHADE(X)                                                             \
+    X(PLAIN, void, bsdf_eval,                                                              \
+      (const lanes_bsdf *b, size_t n, const float *wo, const float *wi, float *f, float *pdf), ()) \
+    X(PLAIN, void, bsdf_sample,                                                            \
+      (const lanes_bsdf *b, size_t n, const float *wo, const float *u, float *wi,          \
+       float *weight, float *pdf, uint8_t *flags),                                         \
+      ())                                                                                  \
+    X(PLAIN, void, texture_color,                                                          \
+      (const lanes_texture *t, size_t n, const float *p, float *weight, float *color), ())  \
+    X(PLAIN, void, noise, (size_t n, const float *p, float *out), ())
+
 #define LANES_KERNELS(X)                                                                   \
     LANES_KERNELS_RAY(X)                                                                   \
     LANES_KERNELS_BOX(X)                                                                   \
@@ -153,7 +173,8 @@
     LANES_KERNELS_FRUSTUM(X)                                                               \
     LANES_KERNELS_TRAVERSE(X)                                                              \
     LANES_KERNELS_HYBRID(X)                                                                \
-    LANES_KERNELS_PACKET(X)
+    LANES_KERNELS_PACKET(X)                                                                \
+    LANES_KERNELS_SHADE(X)
 
 /* The lanes_kernels member of a row. */
 #define LANES_KERNEL_MEMBER(kind, ret, name, params, args) LANES_KERNEL_MEMBER_##kind(ret, name, params)

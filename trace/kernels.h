@@ -32,7 +32,9 @@
 #include "build/accuracy.h"
 #include "build/layout.h"
 #include "simd/isa.h"
+#include "trace/bsdf.h"
 #include "trace/kernel_list.h"
+#include "trace/texture.h"
 
 /* Ray/triangle algorithms. */
 typedef enum lanes_tri_algo {
