@@ -8,6 +8,7 @@
 extern const cli_command cli_cmd_info;          /* cmd_info.c */
 extern const cli_command cli_cmd_bench_kernels; /* cmd_bench_kernels.c */
 extern const cli_command cli_cmd_render;        /* cmd_render.c */
+extern const cli_command cli_cmd_paths;         /* cmd_paths.c */
 extern const cli_command cli_cmd_study;         /* cmd_study.c */
 extern const cli_command cli_cmd_accuracy;      /* cmd_accuracy.c */
 #ifdef LANES_HAVE_COMPARE

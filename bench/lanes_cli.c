@@ -38,6 +38,7 @@ static const cli_command cli_cmd_help = {
 static const cli_command *const commands[] = {
     &cli_cmd_info,
     &cli_cmd_render,
+    &cli_cmd_paths,
 #ifdef LANES_HAVE_COMPARE
     &cli_cmd_compare,
 #endif

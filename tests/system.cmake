@@ -181,6 +181,16 @@ if(lanes_cli_target)
       break()
     endif()
   endforeach()
+  # lanes paths: an image and its measurements as JSON; bad options exit 2
+  # naming the option and its range.
+  add_test(NAME cli.paths
+    COMMAND bash -c "set -e; out=$(\"$0\" paths --size 16x16 --spp 2 --json -o \"$1/paths.exr\"); echo \"$out\"; \
+                     grep -q '\"shading_utilization\": 1' <<< \"$out\"; test -s \"$1/paths.exr\"; \
+                     for bad in '--spp 0' '--depth 33' '--method stream' '--background -1'; do \
+                       set +e; msg=$(\"$0\" paths --size 8x8 $bad 2>&1); s=$?; set -e; echo \"$bad: $s: $msg\" | head -2; \
+                       test $s -eq 2; grep -q -- \"$\{bad%% *\}\" <<< \"$msg\"; done"
+            $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
+  list(APPEND lanes_output_tests cli.paths)
   set_tests_properties(cli.output_folders cli.output_unwritable cli.image_unwritable ${lanes_output_tests} PROPERTIES
     LABELS cli TIMEOUT 120 ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 

@@ -1,0 +1,143 @@
+/* `lanes paths`: the path tracer (trace/paths.h) on one scene, an image
+ * through OpenImageIO and what it measured: rays per second and the
+ * shading's SIMD utilisation, as a line or as JSON. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench/cli_commands.h"
+#include "bench/cli_common.h"
+#include "bench/image_io.h"
+#include "build/parallel.h"
+#include "build/scene_load.h"
+#include "trace/paths.h"
+#include "trace/scene_plan.h"
+
+static int paths_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
+{
+    const char *scene_spec = NULL, *out_path = NULL, *value, *method_name = "single", *accuracy_name = NULL;
+    lanes_paths_options o;
+    lanes_paths_default_options(&o);
+    bool json = false;
+
+    cli_args a = cli_args_begin(ctx, self, argc, argv);
+    while (cli_args_next(&a)) {
+        if (cli_value(&a, "-o", &out_path) || cli_value(&a, "--output", &out_path)) {
+        } else if (cli_value(&a, "--method", &method_name)) {
+        } else if (cli_value(&a, "--accuracy", &accuracy_name)) {
+        } else if (cli_value(&a, "--spp", &value)) {
+            o.spp = (int)cli_parse_count(&a, "--spp", value, 1, LANES_PATHS_MAX_SPP);
+        } else if (cli_value(&a, "--depth", &value)) {
+            o.depth = (int)cli_parse_count(&a, "--depth", value, 1, LANES_PATHS_MAX_DEPTH);
+        } else if (cli_value(&a, "--threads", &value)) {
+            o.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
+        } else if (cli_value(&a, "--background", &value)) {
+            double g = cli_parse_real(&a, "--background", value, 0.0, 1e30);
+            o.uniform_background = true;
+            o.background[0] = o.background[1] = o.background[2] = (float)g;
+        } else if (cli_value(&a, "--size", &value)) {
+            int w = 0, h = 0;
+            char tail;
+            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > LANES_CAMERA_MAX_SIDE ||
+                h > LANES_CAMERA_MAX_SIDE)
+                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..%d, not '%s'", LANES_CAMERA_MAX_SIDE,
+                                value);
+            o.width = w, o.height = h;
+        } else if (cli_flag(&a, "--json")) {
+            json = true;
+        } else if (cli_global_option(&a)) {
+        } else if (a.argv[a.i][0] != '-' && !scene_spec) {
+            scene_spec = a.argv[a.i];
+        } else {
+            cli_unknown_option(&a);
+        }
+    }
+    int method = lanes_paths_method_from_name(method_name);
+    if (method < 0) cli_usage_error(ctx, self, "unknown method '%s' (single, single-1lane)", method_name);
+    o.method = (lanes_paths_method)method;
+    int accuracy = accuracy_name ? lanes_accuracy_from_name(accuracy_name) : -1;
+    if (accuracy_name && accuracy < 0)
+        cli_usage_error(ctx, self, "unknown accuracy mode '%s' (fast, default, robust)", accuracy_name);
+    o.accuracy = (lanes_accuracy)accuracy;
+    if (out_path) cli_make_parent_dirs("paths: -o", out_path);
+    o.isa = lanes_isa_current();
+    const lanes_kernels *k = lanes_kernels_for(o.isa);
+
+    lanes_scene scene;
+    lanes_error err;
+    if (lanes_scene_load(scene_spec, &scene, &err) != LANES_OK) cli_fail("%s", err.message);
+    lanes_render_accel accel;
+    if (lanes_render_accel_build(&scene, k, false, o.threads, &accel, &err) != LANES_OK) {
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
+    lanes_paths_result r;
+    lanes_status st = lanes_paths_render(&scene, &accel, &o, &r, &err);
+    lanes_render_accel_free(&accel);
+    if (st != LANES_OK) {
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
+    if (out_path && lanes_image_write(out_path, r.width, r.height, r.rgb, &err) != LANES_OK) {
+        lanes_paths_result_free(&r);
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
+    uint64_t rays = r.shadow_rays;
+    for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) rays += r.rays_by_depth[d];
+    double mrays = r.seconds > 0.0 ? (double)rays / r.seconds * 1e-6 : 0.0;
+    double utilization = r.shade_slots ? (double)r.shade_live / (double)r.shade_slots : 0.0;
+    int threads = lanes_parallel_threads(o.threads);
+    if (json) {
+        printf("{\"cpu\": ");
+        cli_json_string(stdout, lanes_cpu()->brand);
+        printf(", \"rows\": [{\"scene\": ");
+        cli_json_string(stdout, scene.name);
+        printf(", \"method\": ");
+        cli_json_string(stdout, lanes_paths_method_name(o.method));
+        printf(", \"isa\": ");
+        cli_json_string(stdout, k->name);
+        printf(", \"lanes\": %d, \"threads\": %d, \"materials\": %zu, \"spp\": %d, \"depth\": %d, \"paths\": %llu, "
+               "\"rays\": %llu, \"seconds\": ",
+               k->lanes, threads, scene.material_count, o.spp, o.depth, (unsigned long long)r.paths,
+               (unsigned long long)rays);
+        cli_json_number(stdout, r.seconds);
+        printf(", \"mrays\": ");
+        cli_json_number(stdout, mrays);
+        printf(", \"shading_utilization\": ");
+        cli_json_number(stdout, utilization);
+        printf("}]}\n");
+    } else {
+        printf("%s: %zu triangles, %zu materials; %dx%d, %d spp, depth %d\n", scene.name, scene.triangle_count,
+               scene.material_count, r.width, r.height, o.spp, o.depth);
+        printf("method %s, isa %s (%d lanes), %d threads, on %s\n", lanes_paths_method_name(o.method), k->name,
+               k->lanes, threads, lanes_cpu()->brand);
+        printf("rays: %llu (%llu camera, %llu shadow); %.3f s; %.2f Mrays/s; shading utilisation %.3f\n",
+               (unsigned long long)rays, (unsigned long long)r.rays_by_depth[0], (unsigned long long)r.shadow_rays,
+               r.seconds, mrays, utilization);
+        if (out_path) printf("wrote %s\n", out_path);
+    }
+    lanes_paths_result_free(&r);
+    lanes_scene_free(&scene);
+    return 0;
+}
+
+const cli_command cli_cmd_paths = {
+    .name = "paths",
+    .summary = "path-trace a scene (next-event estimation), with rays per second and shading utilisation",
+    .usage = "usage: lanes paths [SCENE] [-o FILE] [options]\n"
+             "SCENE: a built-in scene name, a scene file (.json) or a mesh file; default: the\n"
+             "embedded default scene\n"
+             "  -o, --output FILE     image to write (PNG, EXR, ... as OpenImageIO knows them)\n"
+             "  --method M            single (one path at a time, scalar shading; default) or\n"
+             "                        single-1lane (the set's own shading kernels, one live lane)\n"
+             "  --spp N               samples per pixel (default 16)\n"
+             "  --depth N             path vertices after the camera, 1..32 (default 8)\n"
+             "  --background L        a uniform background of radiance L instead of the sky\n"
+             "  --accuracy M          fast, default or robust; default: the scene file's, else default\n"
+             "  --size WxH            image size (default: the scene camera's)\n"
+             "  --threads N           threads (default: all cores)\n"
+             "  --json                the measurements as JSON\n"
+             "  --isa NAME            instruction set\n",
+    .run = paths_run,
+};

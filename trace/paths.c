@@ -1,0 +1,436 @@
+/* The path tracer's single-path methods (see paths.h): threads take 16x16
+ * tiles from a shared counter, and trace each pixel's samples one path at
+ * a time. */
+#include "trace/paths.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "build/camera.h"
+#include "build/parallel.h"
+#include "trace/scene_plan.h"
+#include "trace/shading.h"
+
+static const char *const method_names[LANES_PATHS_METHOD_COUNT] = {"single", "single-1lane"};
+
+const char *lanes_paths_method_name(lanes_paths_method m)
+{
+    return (unsigned)m < LANES_PATHS_METHOD_COUNT ? method_names[m] : "?";
+}
+
+int lanes_paths_method_from_name(const char *name)
+{
+    for (int i = 0; i < LANES_PATHS_METHOD_COUNT; i++)
+        if (strcmp(name, method_names[i]) == 0) return i;
+    return -1;
+}
+
+void lanes_paths_default_options(lanes_paths_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->isa = lanes_isa_current();
+    o->method = LANES_PATHS_SINGLE;
+    o->accuracy = LANES_ACCURACY_FROM_SCENE;
+    o->spp = 16;
+    o->depth = 8;
+}
+
+/* ---- random numbers: simd/vrandom.h's function, for one lane ------------ */
+
+static uint32_t hash32(uint32_t x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+/* The dimensions a path vertex draws. */
+enum { DIM_PIXEL_X, DIM_PIXEL_Y, DIM_LIGHT, DIM_LIGHT_U, DIM_LIGHT_V, DIM_BSDF_1, DIM_BSDF_2, DIM_BSDF_3, DIM_ROULETTE };
+
+static float random01(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dim)
+{
+    uint32_t h = hash32(hash32(hash32(hash32(pixel) + sample) + depth) + dim);
+    return (float)(h >> 8) * 0x1p-24f;
+}
+
+/* ---- the scene as the integrator reads it ------------------------------ */
+
+typedef struct {
+    bool area;       /* else a point light */
+    uint32_t index;  /* into the scene's point or area lights */
+    float area_size; /* parallelogram area */
+    vec3 normal;     /* parallelogram's emitting side */
+} light_ref;
+
+typedef struct {
+    const lanes_scene *scene;
+    const lanes_render_accel *accel;
+    const lanes_paths_options *opt;
+    lanes_accuracy accuracy;
+    lanes_rcp_mode rcp;
+    float eps;
+    const lanes_kernels *trace_k, *shade_k;
+    lanes_view view;
+    lanes_bsdf *bsdf;       /* per material */
+    bool *area_light_quad;  /* per material: shows a parallelogram light */
+    light_ref *lights;
+    float *light_cdf;       /* light_count + 1 entries, light_cdf[light_count] = 1 */
+    size_t light_count;
+    float *rgb;
+    int width, height, tiles_x, tiles_y;
+} paths_job;
+
+typedef struct {
+    uint64_t paths, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
+    uint64_t shade_calls, shade_slots, shade_live;
+} paths_counts;
+
+static float luminance(const float c[3]) { return (c[0] + c[1] + c[2]) / 3.0f; }
+
+static lanes_bsdf bsdf_of(const lanes_material *m)
+{
+    lanes_bsdf b;
+    memset(&b, 0, sizeof b);
+    b.kind = m->kind == LANES_MAT_MIRROR ? LANES_BSDF_MIRROR
+             : m->kind == LANES_MAT_GLASS ? LANES_BSDF_GLASS
+                                          : LANES_BSDF_LAMBERT;
+    memcpy(b.albedo, m->color, sizeof b.albedo);
+    b.ior = m->ior;
+    return b;
+}
+
+/* Lights with their selection probabilities, by power: a point light's
+ * 4 pi I, a parallelogram's pi A Le (one-sided), by the channels' mean. */
+static bool prepare_lights(paths_job *job)
+{
+    const lanes_scene *s = job->scene;
+    size_t n = s->point_light_count + s->area_light_count;
+    job->lights = calloc(n + 1, sizeof *job->lights);
+    job->light_cdf = calloc(n + 1, sizeof *job->light_cdf);
+    if (!job->lights || !job->light_cdf) return false;
+    double *power = calloc(n + 1, sizeof *power), total = 0.0;
+    if (!power) return false;
+    size_t k = 0;
+    for (size_t i = 0; i < s->point_light_count; i++) {
+        double p = 4.0 * LANES_PI * luminance(s->point_lights[i].intensity);
+        if (!(p > 0.0)) continue;
+        job->lights[k] = (light_ref){false, (uint32_t)i, 0.0f, v3(0, 0, 0)};
+        power[k++] = p, total += p;
+    }
+    for (size_t i = 0; i < s->area_light_count; i++) {
+        const lanes_area_light *al = &s->area_lights[i];
+        float area;
+        vec3 ln = v3_unit_normal_area(v3_load(al->edge_u), v3_load(al->edge_v), &area);
+        double p = LANES_PI * area * luminance(al->emission);
+        if (!(p > 0.0)) continue;
+        job->lights[k] = (light_ref){true, (uint32_t)i, area, ln};
+        power[k++] = p, total += p;
+    }
+    job->light_count = total > 0.0 ? k : 0;
+    double run = 0.0;
+    for (size_t i = 0; i < job->light_count; i++) {
+        job->light_cdf[i] = (float)(run / total);
+        run += power[i];
+    }
+    job->light_cdf[job->light_count] = 1.0f;
+    free(power);
+    return true;
+}
+
+/* ---- tracing one ray --------------------------------------------------- */
+
+static lanes_hit trace(const paths_job *job, vec3 o, vec3 d, float tfar)
+{
+    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
+    lanes_hit h;
+    lanes_ray_prepare_rcp(&r, job->rcp);
+    job->trace_k->trace_wide(&job->accel->wide, job->accuracy, &r, 1, &h, NULL);
+    return h;
+}
+
+static bool occluded(const paths_job *job, vec3 o, vec3 d, float tfar)
+{
+    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
+    uint8_t hit = 0;
+    lanes_ray_prepare_rcp(&r, job->rcp);
+    job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, &r, 1, &hit, NULL);
+    return hit != 0;
+}
+
+/* ---- the shading frame --------------------------------------------------- */
+
+/* An orthonormal frame around the unit normal n (Duff et al. 2017). */
+typedef struct {
+    vec3 t, b, n;
+} frame;
+
+static frame frame_around(vec3 n)
+{
+    float sign = copysignf(1.0f, n.z), a = -1.0f / (sign + n.z), b = n.x * n.y * a;
+    return (frame){v3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x), v3(b, sign + n.y * n.y * a, -n.y), n};
+}
+
+static vec3 to_local(const frame *f, vec3 v) { return v3(v3_dot(v, f->t), v3_dot(v, f->b), v3_dot(v, f->n)); }
+
+static vec3 to_world(const frame *f, vec3 v)
+{
+    return v3_add(v3_scale(f->t, v.x), v3_add(v3_scale(f->b, v.y), v3_scale(f->n, v.z)));
+}
+
+/* f(wo, wi) through the shading kernels (one item). */
+static vec3 bsdf_f(const paths_job *job, const lanes_bsdf *b, vec3 wo, vec3 wi, paths_counts *c)
+{
+    float o[3] = {wo.x, wo.y, wo.z}, i[3] = {wi.x, wi.y, wi.z}, f[3], pdf;
+    job->shade_k->bsdf_eval(b, 1, o, i, f, &pdf);
+    c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
+    return v3(f[0], f[1], f[2]);
+}
+
+/* ---- one path ------------------------------------------------------------ */
+
+static vec3 background(const paths_job *job, vec3 d)
+{
+    if (job->opt->uniform_background) return v3_load(job->opt->background);
+    return lanes_background(d);
+}
+
+/* Light arriving at the surface from one light chosen by power, through
+ * the BSDF towards wo, over the probability of the choice; 0 when the
+ * shadow ray is blocked. */
+static vec3 next_event(const paths_job *job, const lanes_surface *sf, const frame *fr, const lanes_bsdf *b,
+                       vec3 wo_local, uint32_t pixel, uint32_t sample, uint32_t depth, paths_counts *c)
+{
+    if (job->light_count == 0) return v3(0, 0, 0);
+    const lanes_scene *s = job->scene;
+    float u = random01(pixel, sample, depth, DIM_LIGHT);
+    size_t k = 0;
+    while (k + 1 < job->light_count && job->light_cdf[k + 1] <= u) k++;
+    float pick = job->light_cdf[k + 1] - job->light_cdf[k];
+    const light_ref *l = &job->lights[k];
+    vec3 target, radiance;
+    float geometry; /* cos at the light / distance^2, times the light's area */
+    if (l->area) {
+        const lanes_area_light *al = &s->area_lights[l->index];
+        float a = random01(pixel, sample, depth, DIM_LIGHT_U), bb = random01(pixel, sample, depth, DIM_LIGHT_V);
+        target = v3_add(v3_load(al->corner), v3_add(v3_scale(v3_load(al->edge_u), a), v3_scale(v3_load(al->edge_v), bb)));
+        radiance = v3_load(al->emission);
+        geometry = l->area_size;
+    } else {
+        target = v3_load(s->point_lights[l->index].position);
+        radiance = v3_load(s->point_lights[l->index].intensity);
+        geometry = 1.0f;
+    }
+    vec3 to = v3_sub(target, sf->p);
+    float dist2 = v3_dot(to, to), dist = sqrtf(dist2);
+    if (!(dist > 0.0f)) return v3(0, 0, 0);
+    vec3 wi = v3_scale(to, 1.0f / dist);
+    if (l->area) {
+        float cos_l = -v3_dot(l->normal, wi);
+        if (cos_l <= 0.0f) return v3(0, 0, 0);
+        geometry *= cos_l;
+    }
+    vec3 wi_local = to_local(fr, wi);
+    vec3 f = bsdf_f(job, b, wo_local, wi_local, c);
+    if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) return v3(0, 0, 0);
+    /* The shadow ray leaves from off the surface, on the light's side, and
+     * must stop short of the light by its own length from there: a visible
+     * parallelogram is geometry too, and measured from sf->p the ray ran
+     * past the target (by the offset over the sine of its angle) into the
+     * light's own triangles. */
+    vec3 side = v3_dot(wi, sf->nf) > 0.0f ? sf->nf : v3_scale(sf->nf, -1.0f);
+    vec3 origin = lanes_offset_origin(sf, side, job->accuracy, job->eps);
+    vec3 path = v3_sub(target, origin);
+    float length = sqrtf(v3_dot(path, path));
+    c->shadow++;
+    if (!(length > 0.0f) || occluded(job, origin, v3_scale(path, 1.0f / length), length * (1.0f - 1e-4f)))
+        return v3(0, 0, 0);
+    float k_all = fabsf(wi_local.z) * geometry / (dist2 * pick);
+    return v3_scale(v3_mul(f, radiance), k_all);
+}
+
+static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel, uint32_t sample,
+                       paths_counts *c)
+{
+    const lanes_scene *s = job->scene;
+    vec3 sum = v3(0, 0, 0), beta = v3(1, 1, 1), o = eye, d = dir;
+    bool after_delta = true; /* the camera ray counts as one */
+    c->paths++;
+    for (int depth = 0; depth < job->opt->depth; depth++) {
+        c->by_depth[depth]++;
+        lanes_hit h = trace(job, o, d, INFINITY);
+        if (h.prim == LANES_NO_HIT) {
+            sum = v3_add(sum, v3_mul(beta, background(job, d)));
+            break;
+        }
+        lanes_surface sf = lanes_surface_at(s, &h, d);
+        uint32_t mi = s->material_of[h.prim];
+        const lanes_material *m = &s->materials[mi];
+        vec3 le = v3_load(m->emission);
+        if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
+            bool counts = job->area_light_quad[mi] ? after_delta && sf.front : true;
+            if (counts) sum = v3_add(sum, v3_mul(beta, le));
+        }
+        if (m->kind == LANES_MAT_EMISSIVE) break;
+        const lanes_bsdf *b = &job->bsdf[mi];
+        /* the frame's normal is the triangle's own (by its winding): glass
+         * tells inside from outside by it, the opaque BSDFs are two-sided */
+        frame fr = frame_around(sf.front ? sf.nf : v3_scale(sf.nf, -1.0f));
+        vec3 dn = v3_normalize(d), wo = to_local(&fr, v3_scale(dn, -1.0f));
+        bool delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
+        if (!delta) sum = v3_add(sum, v3_mul(beta, next_event(job, &sf, &fr, b, wo, pixel, sample, (uint32_t)depth, c)));
+
+        float wo3[3] = {wo.x, wo.y, wo.z}, u3[3], wi3[3], w3[3], pdf;
+        uint8_t flags;
+        u3[0] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_1);
+        u3[1] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_2);
+        u3[2] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_3);
+        job->shade_k->bsdf_sample(b, 1, wo3, u3, wi3, w3, &pdf, &flags);
+        c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
+        if (!(flags & LANES_BSDF_VALID)) break;
+        beta = v3_mul(beta, v3(w3[0], w3[1], w3[2]));
+        after_delta = (flags & LANES_BSDF_DELTA) != 0;
+        if (depth + 1 >= 3) {
+            float survive = fminf(1.0f, fmaxf(beta.x, fmaxf(beta.y, beta.z)));
+            if (!(random01(pixel, sample, (uint32_t)depth, DIM_ROULETTE) < survive)) break;
+            beta = v3_scale(beta, 1.0f / survive);
+        }
+        vec3 wi = to_world(&fr, v3(wi3[0], wi3[1], wi3[2]));
+        vec3 side = v3_dot(wi, sf.nf) > 0.0f ? sf.nf : v3_scale(sf.nf, -1.0f);
+        o = lanes_offset_origin(&sf, side, job->accuracy, job->eps);
+        d = wi;
+    }
+    return sum;
+}
+
+/* ---- tiles and threads --------------------------------------------------- */
+
+static void render_tile(const paths_job *job, int tile, paths_counts *c)
+{
+    int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
+    const int spp = job->opt->spp;
+    for (int y = y0; y < y0 + 16 && y < job->height; y++)
+        for (int x = x0; x < x0 + 16 && x < job->width; x++) {
+            uint32_t pixel = (uint32_t)y * (uint32_t)job->width + (uint32_t)x;
+            vec3 sum = v3(0, 0, 0);
+            for (int s = 0; s < spp; s++) {
+                /* sample 0 through the pixel's centre, the rest jittered */
+                float sx = 0.5f, sy = 0.5f;
+                if (s > 0) sx = random01(pixel, (uint32_t)s, 0, DIM_PIXEL_X), sy = random01(pixel, (uint32_t)s, 0, DIM_PIXEL_Y);
+                vec3 d = lanes_view_dir(&job->view, (float)x + sx, (float)y + sy);
+                sum = v3_add(sum, trace_path(job, job->view.eye, d, pixel, (uint32_t)s, c));
+            }
+            float *out = job->rgb + (size_t)pixel * 3;
+            out[0] = sum.x / (float)spp, out[1] = sum.y / (float)spp, out[2] = sum.z / (float)spp;
+        }
+}
+
+typedef struct {
+    const paths_job *job;
+    paths_counts *counts; /* per worker */
+} paths_loop;
+
+static void tile_task(void *ctx, size_t tile, int worker)
+{
+    paths_loop *l = ctx;
+    render_tile(l->job, (int)tile, &l->counts[worker]);
+}
+
+static void free_job(paths_job *job)
+{
+    free(job->bsdf), free(job->area_light_quad), free(job->lights), free(job->light_cdf);
+}
+
+lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                                const lanes_paths_options *opt, lanes_paths_result *out, lanes_error *err)
+{
+    memset(out, 0, sizeof *out);
+    paths_job job;
+    memset(&job, 0, sizeof job);
+    job.scene = scene, job.accel = accel, job.opt = opt;
+    job.trace_k = lanes_kernels_for(opt->isa);
+    if (!job.trace_k || !lanes_isa_supported(opt->isa))
+        return lanes_error_set(err, job.trace_k ? LANES_ERR_CPU_LACKS : LANES_ERR_NOT_COMPILED,
+                               "paths: instruction set '%s' is not available", lanes_isa_name(opt->isa));
+    if ((unsigned)opt->method >= LANES_PATHS_METHOD_COUNT)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: method %d unknown", (int)opt->method);
+    job.shade_k = opt->method == LANES_PATHS_SINGLE ? lanes_kernels_for(LANES_ISA_SCALAR) : job.trace_k;
+    if (!job.shade_k)
+        return lanes_error_set(err, LANES_ERR_NOT_COMPILED, "paths: the scalar set is not compiled in");
+    if (accel->wide.width != job.trace_k->wide_width)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: %s traces a %d-wide BVH (have %d)",
+                               job.trace_k->name, job.trace_k->wide_width, accel->wide.width);
+    job.width = opt->width > 0 ? opt->width : scene->camera.width;
+    job.height = opt->height > 0 ? opt->height : scene->camera.height;
+    if (job.width <= 0 || job.height <= 0 || job.width > LANES_CAMERA_MAX_SIDE || job.height > LANES_CAMERA_MAX_SIDE)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: image size %dx%d out of range (1..%d)", job.width,
+                               job.height, LANES_CAMERA_MAX_SIDE);
+    if (opt->spp < 1 || opt->spp > LANES_PATHS_MAX_SPP)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: %d samples per pixel (1..%d)", opt->spp,
+                               LANES_PATHS_MAX_SPP);
+    if (opt->depth < 1 || opt->depth > LANES_PATHS_MAX_DEPTH)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: depth %d (1..%d)", opt->depth, LANES_PATHS_MAX_DEPTH);
+    if (opt->accuracy < LANES_ACCURACY_FROM_SCENE || opt->accuracy >= LANES_ACCURACY_COUNT)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: accuracy mode %d unknown", (int)opt->accuracy);
+    for (int k = 0; opt->uniform_background && k < 3; k++)
+        if (!(opt->background[k] >= 0.0f && opt->background[k] <= 3.4e38f))
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: background %g is not a radiance (finite, >= 0)",
+                                   (double)opt->background[k]);
+    lanes_scene_plan plan;
+    lanes_scene_plan_make(scene, opt->accuracy, &plan);
+    lanes_status fits = lanes_scene_plan_check(&plan, err);
+    if (fits != LANES_OK) return fits;
+    job.accuracy = plan.accuracy;
+    job.rcp = lanes_accuracy_precision(plan.accuracy).rcp;
+    job.eps = lanes_scene_epsilon(scene);
+    job.view = lanes_view_make(&scene->camera, job.width, job.height);
+
+    size_t nm = scene->material_count ? scene->material_count : 1;
+    job.bsdf = calloc(nm, sizeof *job.bsdf);
+    job.area_light_quad = calloc(nm, sizeof *job.area_light_quad);
+    if (!job.bsdf || !job.area_light_quad || !prepare_lights(&job)) {
+        free_job(&job);
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory");
+    }
+    for (size_t i = 0; i < scene->material_count; i++) {
+        job.bsdf[i] = bsdf_of(&scene->materials[i]);
+        job.area_light_quad[i] = strncmp(scene->materials[i].name, "@area_light_", 12) == 0;
+    }
+    job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
+    int threads = lanes_parallel_threads(opt->threads);
+    paths_counts *counts = calloc((size_t)threads, sizeof *counts);
+    if (!job.rgb || !counts) {
+        free(job.rgb), free(counts), free_job(&job);
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory for the image");
+    }
+    job.tiles_x = (job.width + 15) / 16;
+    job.tiles_y = (job.height + 15) / 16;
+    double t0 = lanes_render_clock();
+    paths_loop loop = {&job, counts};
+    lanes_parallel_for(threads, (size_t)job.tiles_x * (size_t)job.tiles_y, tile_task, &loop);
+    out->seconds = lanes_render_clock() - t0;
+    for (int i = 0; i < threads; i++) {
+        out->paths += counts[i].paths;
+        out->shadow_rays += counts[i].shadow;
+        out->shade_calls += counts[i].shade_calls;
+        out->shade_slots += counts[i].shade_slots;
+        out->shade_live += counts[i].shade_live;
+        for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) out->rays_by_depth[d] += counts[i].by_depth[d];
+    }
+    free(counts);
+    free_job(&job);
+    out->rgb = job.rgb;
+    out->width = job.width;
+    out->height = job.height;
+    return LANES_OK;
+}
+
+void lanes_paths_result_free(lanes_paths_result *r)
+{
+    free(r->rgb);
+    memset(r, 0, sizeof *r);
+}

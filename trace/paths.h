@@ -1,0 +1,78 @@
+/* The path tracer (Afra, Benthin, Wald and Munkberg 2016 measure shading
+ * coherence on one): unidirectional, with next-event estimation. At each
+ * hit the material's BSDF (trace/bsdf.h) is built; one shadow ray goes to
+ * one light picked by power (a point light or a point on a parallelogram
+ * light); one extension ray is sampled from the BSDF; Russian roulette from
+ * the third bounce. Emissive triangles are not sampled by the shadow rays,
+ * so their emission counts at every hit, except the two triangles that
+ * show a visible parallelogram light (`@area_light_N`), which the shadow
+ * rays do sample: those count on camera rays and after delta bounces
+ * (mirror, glass) only, and on their emitting side only. A diffuse
+ * material's `emission`, when set, counts at every hit. Misses see the
+ * background: the scene's sky, or a uniform color.
+ *
+ * Random numbers are a function of (pixel, sample, depth, dimension)
+ * (simd/vrandom.h's hash), so a path's samples do not depend on the order
+ * paths are traced in or on the method.
+ *
+ * Methods (the paper's baselines; packets and streams are to come):
+ *   single        one path at a time through the set's traversal, shaded by
+ *                 the scalar set's BSDF kernels;
+ *   single-1lane  the same, shaded by the set's own kernels with one live
+ *                 lane (what a width costs a path that shades alone).
+ *
+ * Compiled for the x86-64 baseline: per-ray work happens in the kernels. */
+#ifndef LANES_TRACE_PATHS_H
+#define LANES_TRACE_PATHS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "build/scene.h"
+#include "trace/render.h"
+
+typedef enum lanes_paths_method {
+    LANES_PATHS_SINGLE = 0,
+    LANES_PATHS_SINGLE_1LANE,
+    LANES_PATHS_METHOD_COUNT
+} lanes_paths_method;
+
+const char *lanes_paths_method_name(lanes_paths_method m);
+/* -1 for an unknown name */
+int lanes_paths_method_from_name(const char *name);
+
+#define LANES_PATHS_MAX_DEPTH 32
+#define LANES_PATHS_MAX_SPP 65536
+
+typedef struct lanes_paths_options {
+    lanes_isa isa;
+    lanes_paths_method method;
+    lanes_accuracy accuracy; /* LANES_ACCURACY_FROM_SCENE by default */
+    int width, height;       /* 0: the scene camera's */
+    int spp;                 /* samples per pixel, 1 .. LANES_PATHS_MAX_SPP; one sample goes through the pixel's centre */
+    int depth;               /* path vertices after the camera, 1 .. LANES_PATHS_MAX_DEPTH; default 8 */
+    int threads;             /* 0: all cores */
+    bool uniform_background; /* misses see `background` instead of the sky */
+    float background[3];
+} lanes_paths_options;
+
+void lanes_paths_default_options(lanes_paths_options *o);
+
+typedef struct lanes_paths_result {
+    float *rgb; /* width * height * 3, linear radiance, the mean of the samples */
+    int width, height;
+    double seconds;
+    uint64_t paths;
+    uint64_t rays_by_depth[LANES_PATHS_MAX_DEPTH + 1]; /* [0]: camera rays, [d]: extension rays of bounce d */
+    uint64_t shadow_rays;
+    /* Shading: kernel calls, the lane slots they offered and the lanes that
+     * carried a hit; utilisation = live / slots. */
+    uint64_t shade_calls, shade_slots, shade_live;
+} lanes_paths_result;
+
+/* accel: the wide BVH of opt->isa's set (lanes_render_accel_build). */
+lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_accel *accel,
+                                const lanes_paths_options *opt, lanes_paths_result *out, lanes_error *err);
+void lanes_paths_result_free(lanes_paths_result *r);
+
+#endif
