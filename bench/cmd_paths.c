@@ -53,7 +53,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         }
     }
     int method = lanes_paths_method_from_name(method_name);
-    if (method < 0) cli_usage_error(ctx, self, "unknown method '%s' (single, single-1lane)", method_name);
+    if (method < 0) cli_usage_error(ctx, self, "unknown method '%s' (single, single-1lane, packet)", method_name);
     o.method = (lanes_paths_method)method;
     int accuracy = accuracy_name ? lanes_accuracy_from_name(accuracy_name) : -1;
     if (accuracy_name && accuracy < 0)
@@ -129,8 +129,9 @@ const cli_command cli_cmd_paths = {
              "SCENE: a built-in scene name, a scene file (.json) or a mesh file; default: the\n"
              "embedded default scene\n"
              "  -o, --output FILE     image to write (PNG, EXR, ... as OpenImageIO knows them)\n"
-             "  --method M            single (one path at a time, scalar shading; default) or\n"
-             "                        single-1lane (the set's own shading kernels, one live lane)\n"
+             "  --method M            single (one path at a time, scalar shading; default),\n"
+             "                        single-1lane (the set's own shading kernels, one live lane) or\n"
+             "                        packet (W paths together, each material under its lane mask)\n"
              "  --spp N               samples per pixel (default 16)\n"
              "  --depth N             path vertices after the camera, 1..32 (default 8)\n"
              "  --background L        a uniform background of radiance L instead of the sky\n"

@@ -12,8 +12,9 @@
  *   - a visible square light over a Lambert plane: rho E / pi with E from
  *     Lambert's polygon formula, the mean relative error within 4
  *     standard errors (and not doubled by bounces into the square);
- *   - single and single-1lane give the same image at the scalar set, and
- *     the shading counters add up (1lane: one live lane of W);
+ *   - single and single-1lane give the same image at the scalar set;
+ *     packet and single-1lane the same image, rays and paths at each set,
+ *     packets with more live lanes per shading call; the counters add up;
  *   - bad options are refused with a message. */
 #include <math.h>
 #include <stdio.h>
@@ -266,6 +267,26 @@ static void methods_and_counters(lanes_isa best)
               (unsigned long long)a.shade_calls, (unsigned long long)a.shade_slots);
         CHECK(a.shadow_rays > 0 && a.rays_by_depth[1] > 0, "no shadow or extension rays in the default scene");
         lanes_paths_result_free(&a), lanes_paths_result_free(&b);
+    }
+    /* packets: the same radiance as single-1lane at the same set, bit for
+     * bit, and the same rays; more live lanes per shading call */
+    lanes_isa sets[2] = {LANES_ISA_SCALAR, best};
+    for (int i = 0; i < 2; i++) {
+        lanes_paths_result one, packet;
+        bool both = render(&s, sets[i], LANES_PATHS_SINGLE_1LANE, 2, 8, NULL, &one);
+        both = render(&s, sets[i], LANES_PATHS_PACKET, 2, 8, NULL, &packet) && both;
+        if (!both) continue;
+        CHECK(memcmp(one.rgb, packet.rgb, (size_t)one.width * (size_t)one.height * 3 * sizeof(float)) == 0,
+              "%s: packet and single-1lane images differ", lanes_isa_name(sets[i]));
+        CHECK(memcmp(one.rays_by_depth, packet.rays_by_depth, sizeof one.rays_by_depth) == 0 &&
+                  one.shadow_rays == packet.shadow_rays && one.paths == packet.paths,
+              "%s: packet and single-1lane trace different rays", lanes_isa_name(sets[i]));
+        double u1 = (double)one.shade_live / (double)one.shade_slots, up = (double)packet.shade_live / (double)packet.shade_slots;
+        int lanes = lanes_kernels_for(sets[i])->lanes;
+        printf("  %s: shading utilisation single-1lane %.3f, packet %.3f\n", lanes_isa_name(sets[i]), u1, up);
+        CHECK(lanes == 1 ? up == 1.0 : (up > u1 && up < 1.0), "%s: packet utilisation %.3f, single-1lane %.3f",
+              lanes_isa_name(sets[i]), up, u1);
+        lanes_paths_result_free(&one), lanes_paths_result_free(&packet);
     }
     lanes_paths_result w;
     if (render(&s, best, LANES_PATHS_SINGLE_1LANE, 1, 8, NULL, &w)) {

@@ -13,7 +13,7 @@
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
 
-static const char *const method_names[LANES_PATHS_METHOD_COUNT] = {"single", "single-1lane"};
+static const char *const method_names[LANES_PATHS_METHOD_COUNT] = {"single", "single-1lane", "packet"};
 
 const char *lanes_paths_method_name(lanes_paths_method m)
 {
@@ -199,58 +199,103 @@ static vec3 background(const paths_job *job, vec3 d)
     return lanes_background(d);
 }
 
-/* Light arriving at the surface from one light chosen by power, through
- * the BSDF towards wo, over the probability of the choice; 0 when the
- * shadow ray is blocked. */
-static vec3 next_event(const paths_job *job, const lanes_surface *sf, const frame *fr, const lanes_bsdf *b,
-                       vec3 wo_local, uint32_t pixel, uint32_t sample, uint32_t depth, paths_counts *c)
+/* A shadow ray's set-up: one light chosen by power, a point on it, the
+ * direction in the shading frame (wi, for the BSDF) and what arrives along
+ * it, over the probability of the choice (scale); `active` false when the
+ * light cannot reach the surface. */
+typedef struct {
+    bool active;
+    vec3 target, wi, wi_local, radiance;
+    float scale;
+} light_sample;
+
+static light_sample light_pick(const paths_job *job, const lanes_surface *sf, const frame *fr, uint32_t pixel,
+                               uint32_t sample, uint32_t depth)
 {
-    if (job->light_count == 0) return v3(0, 0, 0);
+    light_sample ls;
+    memset(&ls, 0, sizeof ls);
+    if (job->light_count == 0) return ls;
     const lanes_scene *s = job->scene;
     float u = random01(pixel, sample, depth, DIM_LIGHT);
     size_t k = 0;
     while (k + 1 < job->light_count && job->light_cdf[k + 1] <= u) k++;
     float pick = job->light_cdf[k + 1] - job->light_cdf[k];
     const light_ref *l = &job->lights[k];
-    vec3 target, radiance;
-    float geometry; /* cos at the light / distance^2, times the light's area */
+    float geometry; /* the light's area times its cosine, or 1 for a point */
     if (l->area) {
         const lanes_area_light *al = &s->area_lights[l->index];
         float a = random01(pixel, sample, depth, DIM_LIGHT_U), bb = random01(pixel, sample, depth, DIM_LIGHT_V);
-        target = v3_add(v3_load(al->corner), v3_add(v3_scale(v3_load(al->edge_u), a), v3_scale(v3_load(al->edge_v), bb)));
-        radiance = v3_load(al->emission);
+        ls.target = v3_add(v3_load(al->corner), v3_add(v3_scale(v3_load(al->edge_u), a), v3_scale(v3_load(al->edge_v), bb)));
+        ls.radiance = v3_load(al->emission);
         geometry = l->area_size;
     } else {
-        target = v3_load(s->point_lights[l->index].position);
-        radiance = v3_load(s->point_lights[l->index].intensity);
+        ls.target = v3_load(s->point_lights[l->index].position);
+        ls.radiance = v3_load(s->point_lights[l->index].intensity);
         geometry = 1.0f;
     }
-    vec3 to = v3_sub(target, sf->p);
+    vec3 to = v3_sub(ls.target, sf->p);
     float dist2 = v3_dot(to, to), dist = sqrtf(dist2);
-    if (!(dist > 0.0f)) return v3(0, 0, 0);
-    vec3 wi = v3_scale(to, 1.0f / dist);
+    if (!(dist > 0.0f)) return ls;
+    ls.wi = v3_scale(to, 1.0f / dist);
     if (l->area) {
-        float cos_l = -v3_dot(l->normal, wi);
-        if (cos_l <= 0.0f) return v3(0, 0, 0);
+        float cos_l = -v3_dot(l->normal, ls.wi);
+        if (cos_l <= 0.0f) return ls;
         geometry *= cos_l;
     }
-    vec3 wi_local = to_local(fr, wi);
-    vec3 f = bsdf_f(job, b, wo_local, wi_local, c);
+    ls.wi_local = to_local(fr, ls.wi);
+    ls.scale = fabsf(ls.wi_local.z) * geometry / (dist2 * pick);
+    ls.active = true;
+    return ls;
+}
+
+/* The light the sample brings through the BSDF value f, once its shadow
+ * ray is traced. */
+static vec3 light_finish(const paths_job *job, const lanes_surface *sf, const light_sample *ls, vec3 f,
+                         paths_counts *c)
+{
     if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) return v3(0, 0, 0);
     /* The shadow ray leaves from off the surface, on the light's side, and
      * must stop short of the light by its own length from there: a visible
      * parallelogram is geometry too, and measured from sf->p the ray ran
      * past the target (by the offset over the sine of its angle) into the
      * light's own triangles. */
-    vec3 side = v3_dot(wi, sf->nf) > 0.0f ? sf->nf : v3_scale(sf->nf, -1.0f);
+    vec3 side = v3_dot(ls->wi, sf->nf) > 0.0f ? sf->nf : v3_scale(sf->nf, -1.0f);
     vec3 origin = lanes_offset_origin(sf, side, job->accuracy, job->eps);
-    vec3 path = v3_sub(target, origin);
+    vec3 path = v3_sub(ls->target, origin);
     float length = sqrtf(v3_dot(path, path));
     c->shadow++;
     if (!(length > 0.0f) || occluded(job, origin, v3_scale(path, 1.0f / length), length * (1.0f - 1e-4f)))
         return v3(0, 0, 0);
-    float k_all = fabsf(wi_local.z) * geometry / (dist2 * pick);
-    return v3_scale(v3_mul(f, radiance), k_all);
+    return v3_scale(v3_mul(f, ls->radiance), ls->scale);
+}
+
+/* Light arriving at the surface from one light chosen by power, through
+ * the BSDF towards wo, over the probability of the choice; 0 when the
+ * shadow ray is blocked. */
+static vec3 next_event(const paths_job *job, const lanes_surface *sf, const frame *fr, const lanes_bsdf *b,
+                       vec3 wo_local, uint32_t pixel, uint32_t sample, uint32_t depth, paths_counts *c)
+{
+    light_sample ls = light_pick(job, sf, fr, pixel, sample, depth);
+    if (!ls.active) return v3(0, 0, 0);
+    return light_finish(job, sf, &ls, bsdf_f(job, b, wo_local, ls.wi_local, c), c);
+}
+
+/* Where an extension ray with the BSDF's weight w3 leaves along wi (shading
+ * frame): the new throughput, or false when the roulette ends the path. */
+static bool continue_path(const paths_job *job, const lanes_surface *sf, const frame *fr, const float wi3[3],
+                          const float w3[3], int depth, uint32_t pixel, uint32_t sample, vec3 *beta, vec3 *o, vec3 *d)
+{
+    *beta = v3_mul(*beta, v3(w3[0], w3[1], w3[2]));
+    if (depth + 1 >= 3) {
+        float survive = fminf(1.0f, fmaxf(beta->x, fmaxf(beta->y, beta->z)));
+        if (!(random01(pixel, sample, (uint32_t)depth, DIM_ROULETTE) < survive)) return false;
+        *beta = v3_scale(*beta, 1.0f / survive);
+    }
+    vec3 wi = to_world(fr, v3(wi3[0], wi3[1], wi3[2]));
+    vec3 side = v3_dot(wi, sf->nf) > 0.0f ? sf->nf : v3_scale(sf->nf, -1.0f);
+    *o = lanes_offset_origin(sf, side, job->accuracy, job->eps);
+    *d = wi;
+    return true;
 }
 
 static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel, uint32_t sample,
@@ -292,19 +337,164 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
         job->shade_k->bsdf_sample(b, 1, wo3, u3, wi3, w3, &pdf, &flags);
         c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
         if (!(flags & LANES_BSDF_VALID)) break;
-        beta = v3_mul(beta, v3(w3[0], w3[1], w3[2]));
         after_delta = (flags & LANES_BSDF_DELTA) != 0;
-        if (depth + 1 >= 3) {
-            float survive = fminf(1.0f, fmaxf(beta.x, fmaxf(beta.y, beta.z)));
-            if (!(random01(pixel, sample, (uint32_t)depth, DIM_ROULETTE) < survive)) break;
-            beta = v3_scale(beta, 1.0f / survive);
-        }
-        vec3 wi = to_world(&fr, v3(wi3[0], wi3[1], wi3[2]));
-        vec3 side = v3_dot(wi, sf.nf) > 0.0f ? sf.nf : v3_scale(sf.nf, -1.0f);
-        o = lanes_offset_origin(&sf, side, job->accuracy, job->eps);
-        d = wi;
+        if (!continue_path(job, &sf, &fr, wi3, w3, depth, pixel, sample, &beta, &o, &d)) break;
     }
     return sum;
+}
+
+/* ---- packets: W paths at once ------------------------------------------- */
+
+/* A path of a packet, between bounces. */
+typedef struct {
+    vec3 o, d, beta, sum, wo;
+    uint32_t pixel, sample, material;
+    bool alive, after_delta;
+    lanes_surface sf;
+    frame fr;
+    light_sample ls;
+} packet_lane;
+
+/* Directions in SoA form for one shading call over the packet's W lanes;
+ * lanes outside the call hold a harmless direction. */
+typedef struct {
+    float wo[3 * LANES_MAX_W], wi[3 * LANES_MAX_W], u[3 * LANES_MAX_W], f[3 * LANES_MAX_W], w[3 * LANES_MAX_W];
+    float pdf[LANES_MAX_W];
+    uint8_t flags[LANES_MAX_W];
+} packet_soa;
+
+static void soa_put(float *soa, int w, int i, vec3 v) { soa[i] = v.x, soa[w + i] = v.y, soa[2 * w + i] = v.z; }
+
+/* Embree's ISPC path tracer in shape: the packet's paths go on together;
+ * at each bounce every material present shades under its lane mask, one
+ * call of W lanes each (the others idle: the utilisation counted), and a
+ * path that ends leaves its lane empty. Each lane computes what
+ * single-1lane computes for its path, operation for operation. */
+static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, const uint32_t *sample, int n, vec3 *sum,
+                               paths_counts *c)
+{
+    const int w = job->shade_k->lanes;
+    const lanes_scene *s = job->scene;
+    packet_lane L[LANES_MAX_W];
+    packet_soa q;
+    for (int i = 0; i < n; i++) {
+        memset(&L[i], 0, sizeof L[i]);
+        L[i].pixel = pixel[i], L[i].sample = sample[i];
+        L[i].alive = L[i].after_delta = true;
+        L[i].beta = v3(1, 1, 1);
+        uint32_t px = pixel[i] % (uint32_t)job->width, py = pixel[i] / (uint32_t)job->width;
+        float sx = 0.5f, sy = 0.5f;
+        if (sample[i] > 0) sx = random01(pixel[i], sample[i], 0, DIM_PIXEL_X), sy = random01(pixel[i], sample[i], 0, DIM_PIXEL_Y);
+        L[i].o = job->view.eye;
+        L[i].d = lanes_view_dir(&job->view, (float)px + sx, (float)py + sy);
+        c->paths++;
+    }
+    for (int depth = 0; depth < job->opt->depth; depth++) {
+        bool any = false;
+        for (int i = 0; i < n; i++) {
+            packet_lane *l = &L[i];
+            if (!l->alive) continue;
+            c->by_depth[depth]++;
+            lanes_hit h = trace(job, l->o, l->d, INFINITY);
+            if (h.prim == LANES_NO_HIT) {
+                l->sum = v3_add(l->sum, v3_mul(l->beta, background(job, l->d)));
+                l->alive = false;
+                continue;
+            }
+            l->sf = lanes_surface_at(s, &h, l->d);
+            l->material = s->material_of[h.prim];
+            const lanes_material *m = &s->materials[l->material];
+            if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
+                bool counts = job->area_light_quad[l->material] ? l->after_delta && l->sf.front : true;
+                if (counts) l->sum = v3_add(l->sum, v3_mul(l->beta, v3_load(m->emission)));
+            }
+            if (m->kind == LANES_MAT_EMISSIVE) {
+                l->alive = false;
+                continue;
+            }
+            l->fr = frame_around(l->sf.front ? l->sf.nf : v3_scale(l->sf.nf, -1.0f));
+            l->wo = to_local(&l->fr, v3_scale(v3_normalize(l->d), -1.0f));
+            any = true;
+        }
+        if (!any) break;
+        /* each material present, in the order its first lane comes */
+        uint32_t pending = 0;
+        for (int i = 0; i < n; i++) pending |= (uint32_t)L[i].alive << i;
+        while (pending) {
+            uint32_t mat = L[__builtin_ctz(pending)].material, mask = 0;
+            for (int i = 0; i < n; i++)
+                if ((pending >> i & 1u) && L[i].material == mat) mask |= 1u << i;
+            pending &= ~mask;
+            const lanes_bsdf *b = &job->bsdf[mat];
+            const vec3 up = v3(0, 0, 1);
+            if (b->kind != LANES_BSDF_MIRROR && b->kind != LANES_BSDF_GLASS) {
+                uint32_t lit = 0;
+                for (int i = 0; i < w; i++) {
+                    bool in = i < n && (mask >> i & 1u);
+                    if (in) L[i].ls = light_pick(job, &L[i].sf, &L[i].fr, L[i].pixel, L[i].sample, (uint32_t)depth);
+                    bool active = in && L[i].ls.active;
+                    lit |= (uint32_t)active << i;
+                    soa_put(q.wo, w, i, active ? L[i].wo : up);
+                    soa_put(q.wi, w, i, active ? L[i].ls.wi_local : up);
+                }
+                if (lit) {
+                    job->shade_k->bsdf_eval(b, (size_t)w, q.wo, q.wi, q.f, q.pdf);
+                    c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(lit);
+                    for (int i = 0; i < n; i++)
+                        if (lit >> i & 1u) {
+                            vec3 f = v3(q.f[i], q.f[w + i], q.f[2 * w + i]);
+                            L[i].sum = v3_add(L[i].sum, v3_mul(L[i].beta, light_finish(job, &L[i].sf, &L[i].ls, f, c)));
+                        }
+                }
+            }
+            for (int i = 0; i < w; i++) {
+                bool in = i < n && (mask >> i & 1u);
+                soa_put(q.wo, w, i, in ? L[i].wo : up);
+                for (int k = 0; k < 3; k++)
+                    q.u[k * w + i] = in ? random01(L[i].pixel, L[i].sample, (uint32_t)depth, DIM_BSDF_1 + (uint32_t)k) : 0.5f;
+            }
+            job->shade_k->bsdf_sample(b, (size_t)w, q.wo, q.u, q.wi, q.w, q.pdf, q.flags);
+            c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(mask);
+            for (int i = 0; i < n; i++) {
+                if (!(mask >> i & 1u)) continue;
+                packet_lane *l = &L[i];
+                if (!(q.flags[i] & LANES_BSDF_VALID)) {
+                    l->alive = false;
+                    continue;
+                }
+                l->after_delta = (q.flags[i] & LANES_BSDF_DELTA) != 0;
+                float wi3[3] = {q.wi[i], q.wi[w + i], q.wi[2 * w + i]}, w3[3] = {q.w[i], q.w[w + i], q.w[2 * w + i]};
+                l->alive = continue_path(job, &l->sf, &l->fr, wi3, w3, depth, l->pixel, l->sample, &l->beta, &l->o, &l->d);
+            }
+        }
+    }
+    for (int i = 0; i < n; i++) sum[i] = L[i].sum;
+}
+
+/* A tile's paths in packets of W: sample by sample, W pixels of the tile
+ * in scanline order at a time (coherent camera rays). */
+static void render_tile_packets(const paths_job *job, int x0, int y0, paths_counts *c)
+{
+    const int w = job->shade_k->lanes;
+    uint32_t tile_pixel[256];
+    vec3 acc[256];
+    int count = 0;
+    for (int y = y0; y < y0 + 16 && y < job->height; y++)
+        for (int x = x0; x < x0 + 16 && x < job->width; x++)
+            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
+    for (int s = 0; s < job->opt->spp; s++)
+        for (int first = 0; first < count; first += w) {
+            int n = count - first < w ? count - first : w;
+            uint32_t samples[LANES_MAX_W];
+            vec3 sums[LANES_MAX_W];
+            for (int i = 0; i < n; i++) samples[i] = (uint32_t)s;
+            trace_packet_paths(job, tile_pixel + first, samples, n, sums, c);
+            for (int i = 0; i < n; i++) acc[first + i] = v3_add(acc[first + i], sums[i]);
+        }
+    for (int k = 0; k < count; k++) {
+        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
+        out[0] = acc[k].x / (float)job->opt->spp, out[1] = acc[k].y / (float)job->opt->spp, out[2] = acc[k].z / (float)job->opt->spp;
+    }
 }
 
 /* ---- tiles and threads --------------------------------------------------- */
@@ -312,6 +502,10 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
 static void render_tile(const paths_job *job, int tile, paths_counts *c)
 {
     int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
+    if (job->opt->method == LANES_PATHS_PACKET) {
+        render_tile_packets(job, x0, y0, c);
+        return;
+    }
     const int spp = job->opt->spp;
     for (int y = y0; y < y0 + 16 && y < job->height; y++)
         for (int x = x0; x < x0 + 16 && x < job->width; x++) {

@@ -15,11 +15,17 @@
  * (simd/vrandom.h's hash), so a path's samples do not depend on the order
  * paths are traced in or on the method.
  *
- * Methods (the paper's baselines; packets and streams are to come):
- *   single        one path at a time through the set's traversal, shaded by
- *                 the scalar set's BSDF kernels;
+ * Methods (the paper's baselines; streams are to come), all with the set's
+ * single-ray traversal (trace_wide, occluded_wide):
+ *   single        one path at a time, shaded by the scalar set's BSDF
+ *                 kernels;
  *   single-1lane  the same, shaded by the set's own kernels with one live
- *                 lane (what a width costs a path that shades alone).
+ *                 lane (what a width costs a path that shades alone);
+ *   packet        W paths of a tile (one sample of W pixels) go on
+ *                 together; at each bounce each material present shades
+ *                 under its lane mask in one W-lane call; finished paths
+ *                 leave their lanes empty. The same radiance as
+ *                 single-1lane, bit for bit, per (pixel, sample).
  *
  * Compiled for the x86-64 baseline: per-ray work happens in the kernels. */
 #ifndef LANES_TRACE_PATHS_H
@@ -34,6 +40,7 @@
 typedef enum lanes_paths_method {
     LANES_PATHS_SINGLE = 0,
     LANES_PATHS_SINGLE_1LANE,
+    LANES_PATHS_PACKET,
     LANES_PATHS_METHOD_COUNT
 } lanes_paths_method;
 
