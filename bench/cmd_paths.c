@@ -29,6 +29,9 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
             o.spp = (int)cli_parse_count(&a, "--spp", value, 1, LANES_PATHS_MAX_SPP);
         } else if (cli_value(&a, "--depth", &value)) {
             o.depth = (int)cli_parse_count(&a, "--depth", value, 1, LANES_PATHS_MAX_DEPTH);
+        } else if (cli_value(&a, "--stream", &value)) {
+            o.stream = (int)cli_parse_count(&a, "--stream", value, LANES_PATHS_MIN_STREAM, LANES_PATHS_MAX_STREAM);
+            if (o.stream % 16 != 0) cli_usage_error(ctx, self, "--stream %d: a multiple of 16, please", o.stream);
         } else if (cli_value(&a, "--threads", &value)) {
             o.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
         } else if (cli_value(&a, "--background", &value)) {
@@ -53,7 +56,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         }
     }
     int method = lanes_paths_method_from_name(method_name);
-    if (method < 0) cli_usage_error(ctx, self, "unknown method '%s' (single, single-1lane, packet)", method_name);
+    if (method < 0) cli_usage_error(ctx, self, "unknown method '%s' (single, single-1lane, packet, stream)", method_name);
     o.method = (lanes_paths_method)method;
     int accuracy = accuracy_name ? lanes_accuracy_from_name(accuracy_name) : -1;
     if (accuracy_name && accuracy < 0)
@@ -106,6 +109,18 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         cli_json_number(stdout, mrays);
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, utilization);
+        if (o.method == LANES_PATHS_STREAM) {
+            static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
+                                                                       "shade",    "shadow",    "accumulate"};
+            printf(", \"stream\": %d, \"stream_bytes\": %zu, \"shading_seconds\": ", o.stream, r.stream_bytes);
+            cli_json_number(stdout, r.stage_seconds[LANES_PATHS_STAGE_SHADE]);
+            printf(", \"stage_seconds\": {");
+            for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) {
+                printf("%s\"%s\": ", i ? ", " : "", stages[i]);
+                cli_json_number(stdout, r.stage_seconds[i]);
+            }
+            printf("}");
+        }
         printf("}]}\n");
     } else {
         printf("%s: %zu triangles, %zu materials; %dx%d, %d spp, depth %d\n", scene.name, scene.triangle_count,
@@ -115,6 +130,11 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         printf("rays: %llu (%llu camera, %llu shadow); %.3f s; %.2f Mrays/s; shading utilisation %.3f\n",
                (unsigned long long)rays, (unsigned long long)r.rays_by_depth[0], (unsigned long long)r.shadow_rays,
                r.seconds, mrays, utilization);
+        if (o.method == LANES_PATHS_STREAM)
+            printf("stream of %d paths per thread (%.0f KB); thread seconds: generate %.3f, intersect %.3f, sort %.3f, "
+                   "shade %.3f, shadow %.3f, accumulate %.3f\n",
+                   o.stream, (double)r.stream_bytes / 1024.0, r.stage_seconds[0], r.stage_seconds[1], r.stage_seconds[2],
+                   r.stage_seconds[3], r.stage_seconds[4], r.stage_seconds[5]);
         if (out_path) printf("wrote %s\n", out_path);
     }
     lanes_paths_result_free(&r);
@@ -130,8 +150,12 @@ const cli_command cli_cmd_paths = {
              "embedded default scene\n"
              "  -o, --output FILE     image to write (PNG, EXR, ... as OpenImageIO knows them)\n"
              "  --method M            single (one path at a time, scalar shading; default),\n"
-             "                        single-1lane (the set's own shading kernels, one live lane) or\n"
-             "                        packet (W paths together, each material under its lane mask)\n"
+             "                        single-1lane (the set's own shading kernels, one live lane),\n"
+             "                        packet (W paths together, each material under its lane mask) or\n"
+             "                        stream (per thread a stream of paths sorted by material, shaded\n"
+             "                        W at a time; Afra et al. 2016)\n"
+             "  --stream N            stream method: paths in flight per thread, 256..65536, a\n"
+             "                        multiple of 16 (default 2048)\n"
              "  --spp N               samples per pixel (default 16)\n"
              "  --depth N             path vertices after the camera, 1..32 (default 8)\n"
              "  --background L        a uniform background of radiance L instead of the sky\n"

@@ -13,8 +13,9 @@
  *     Lambert's polygon formula, the mean relative error within 4
  *     standard errors (and not doubled by bounces into the square);
  *   - single and single-1lane give the same image at the scalar set;
- *     packet and single-1lane the same image, rays and paths at each set,
- *     packets with more live lanes per shading call; the counters add up;
+ *     packet and stream the same image, rays and paths as single-1lane at
+ *     each set, with more live lanes per shading call; the counters add
+ *     up; the closed-form scenes above run through every method;
  *   - bad options are refused with a message. */
 #include <math.h>
 #include <stdio.h>
@@ -74,6 +75,7 @@ static bool render(const lanes_scene *s, lanes_isa isa, lanes_paths_method metho
     lanes_paths_options o;
     lanes_paths_default_options(&o);
     o.isa = isa, o.method = method, o.spp = spp, o.depth = depth, o.threads = 2;
+    o.stream = 256; /* the smallest: a tile's slots refilled many times */
     if (background) {
         o.uniform_background = true;
         memcpy(o.background, background, sizeof o.background);
@@ -271,21 +273,23 @@ static void methods_and_counters(lanes_isa best)
     /* packets: the same radiance as single-1lane at the same set, bit for
      * bit, and the same rays; more live lanes per shading call */
     lanes_isa sets[2] = {LANES_ISA_SCALAR, best};
-    for (int i = 0; i < 2; i++) {
+    for (int i = 0; i < 4; i++) {
+        /* packets, then streams (of 256 paths, refilled many times a tile) */
+        lanes_paths_method other = i < 2 ? LANES_PATHS_PACKET : LANES_PATHS_STREAM;
         lanes_paths_result one, packet;
-        bool both = render(&s, sets[i], LANES_PATHS_SINGLE_1LANE, 2, 8, NULL, &one);
-        both = render(&s, sets[i], LANES_PATHS_PACKET, 2, 8, NULL, &packet) && both;
+        bool both = render(&s, sets[i % 2], LANES_PATHS_SINGLE_1LANE, 2, 8, NULL, &one);
+        both = render(&s, sets[i % 2], other, 2, 8, NULL, &packet) && both;
         if (!both) continue;
         CHECK(memcmp(one.rgb, packet.rgb, (size_t)one.width * (size_t)one.height * 3 * sizeof(float)) == 0,
-              "%s: packet and single-1lane images differ", lanes_isa_name(sets[i]));
+              "%s: %s and single-1lane images differ", lanes_isa_name(sets[i % 2]), lanes_paths_method_name(other));
         CHECK(memcmp(one.rays_by_depth, packet.rays_by_depth, sizeof one.rays_by_depth) == 0 &&
                   one.shadow_rays == packet.shadow_rays && one.paths == packet.paths,
-              "%s: packet and single-1lane trace different rays", lanes_isa_name(sets[i]));
+              "%s: %s and single-1lane trace different rays", lanes_isa_name(sets[i % 2]), lanes_paths_method_name(other));
         double u1 = (double)one.shade_live / (double)one.shade_slots, up = (double)packet.shade_live / (double)packet.shade_slots;
-        int lanes = lanes_kernels_for(sets[i])->lanes;
-        printf("  %s: shading utilisation single-1lane %.3f, packet %.3f\n", lanes_isa_name(sets[i]), u1, up);
-        CHECK(lanes == 1 ? up == 1.0 : (up > u1 && up < 1.0), "%s: packet utilisation %.3f, single-1lane %.3f",
-              lanes_isa_name(sets[i]), up, u1);
+        int lanes = lanes_kernels_for(sets[i % 2])->lanes;
+        printf("  %s: shading utilisation single-1lane %.3f, %s %.3f\n", lanes_isa_name(sets[i % 2]), u1, lanes_paths_method_name(other), up);
+        CHECK(lanes == 1 ? up == 1.0 : (up > u1 && up < 1.0), "%s: %s utilisation %.3f, single-1lane %.3f",
+              lanes_isa_name(sets[i % 2]), lanes_paths_method_name(other), up, u1);
         lanes_paths_result_free(&one), lanes_paths_result_free(&packet);
     }
     lanes_paths_result w;
@@ -316,6 +320,14 @@ static void methods_and_counters(lanes_isa best)
             lanes_status st = lanes_paths_render(&s, &accel, &o, &r, &err);
             CHECK(st == LANES_ERR_BAD_INPUT && strstr(err.message, bad[i].says), "refusal %zu: status %d, '%s'", i, st,
                   err.message);
+        }
+        static const int bad_stream[] = {0, 240, 1000, 65552};
+        for (size_t i = 0; i < sizeof bad_stream / sizeof bad_stream[0]; i++) {
+            lanes_paths_default_options(&o);
+            o.isa = best, o.method = LANES_PATHS_STREAM, o.stream = bad_stream[i];
+            lanes_status st = lanes_paths_render(&s, &accel, &o, &r, &err);
+            CHECK(st == LANES_ERR_BAD_INPUT && strstr(err.message, "stream size"), "stream of %d: status %d, '%s'",
+                  bad_stream[i], st, err.message);
         }
         lanes_render_accel_free(&accel);
     }

@@ -10,10 +10,11 @@
 
 #include "build/camera.h"
 #include "build/parallel.h"
+#include "trace/material_sort.h"
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
 
-static const char *const method_names[LANES_PATHS_METHOD_COUNT] = {"single", "single-1lane", "packet"};
+static const char *const method_names[LANES_PATHS_METHOD_COUNT] = {"single", "single-1lane", "packet", "stream"};
 
 const char *lanes_paths_method_name(lanes_paths_method m)
 {
@@ -35,6 +36,7 @@ void lanes_paths_default_options(lanes_paths_options *o)
     o->accuracy = LANES_ACCURACY_FROM_SCENE;
     o->spp = 16;
     o->depth = 8;
+    o->stream = 2048;
 }
 
 /* ---- random numbers: simd/vrandom.h's function, for one lane ------------ */
@@ -85,9 +87,13 @@ typedef struct {
     int width, height, tiles_x, tiles_y;
 } paths_job;
 
+typedef struct stream_state stream_state;
+
 typedef struct {
     uint64_t paths, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
     uint64_t shade_calls, shade_slots, shade_live;
+    double stage_seconds[LANES_PATHS_STAGE_COUNT];
+    stream_state *stream; /* the worker's streams (stream method) */
 } paths_counts;
 
 static float luminance(const float c[3]) { return (c[0] + c[1] + c[2]) / 3.0f; }
@@ -353,6 +359,11 @@ typedef struct {
     lanes_surface sf;
     frame fr;
     light_sample ls;
+    /* streams: the path's bounce, its pixel in the tile, and its sampled
+     * direction until the shadow rays are traced */
+    uint32_t ss_depth, tile_index;
+    uint8_t pending_flags;
+    float pending_wi[3], pending_w[3];
 } packet_lane;
 
 /* Directions in SoA form for one shading call over the packet's W lanes;
@@ -497,6 +508,281 @@ static void render_tile_packets(const paths_job *job, int x0, int y0, paths_coun
     }
 }
 
+/* ---- streams: sorted by material ------------------------------------------ */
+
+/* A worker's streams (Afra et al. 2016): S paths in flight, their
+ * extension rays and their shadow rays, compact; the paths that need
+ * shading sorted by material, shaded in batches of W in that order. */
+struct stream_state {
+    int size;
+    packet_lane *path;    /* slot -> path */
+    lanes_ray *rays;      /* extension rays of the live slots, compact */
+    lanes_hit *hits;
+    uint32_t *ray_slot;   /* ray i is slot ray_slot[i]'s */
+    uint32_t *shade_slot; /* the slots to shade, compact, and their materials */
+    uint32_t *shade_material;
+    uint32_t *offsets, *sorted; /* the material sort */
+    lanes_ray *shadow;    /* shadow rays, compact, and the slot each serves */
+    uint32_t *shadow_slot;
+    vec3 *shadow_add;
+    uint8_t *occluded;
+    uint32_t *free_slots;
+    vec3 *radiance;       /* per (pixel of the tile, sample of the chunk) */
+};
+
+/* Samples of a tile in flight at once: their radiance is kept per
+ * (pixel, sample) and summed in sample order when the chunk is done, so
+ * the image is the same bit for bit as the other methods'. */
+enum { STREAM_CHUNK_SAMPLES = 64 };
+
+static size_t stream_bytes(int size, size_t materials)
+{
+    return (size_t)size * (sizeof(packet_lane) + 2 * sizeof(lanes_ray) + sizeof(lanes_hit) + 6 * sizeof(uint32_t) +
+                           sizeof(vec3) + 1) +
+           (materials + 1) * sizeof(uint32_t) + 256 * STREAM_CHUNK_SAMPLES * sizeof(vec3);
+}
+
+static void stream_free(stream_state *st)
+{
+    if (!st) return;
+    free(st->path), free(st->rays), free(st->hits), free(st->ray_slot), free(st->shade_slot);
+    free(st->shade_material), free(st->offsets), free(st->sorted), free(st->shadow), free(st->shadow_slot);
+    free(st->shadow_add), free(st->occluded), free(st->free_slots), free(st->radiance);
+    memset(st, 0, sizeof *st);
+}
+
+static bool stream_alloc(stream_state *st, int size, size_t materials)
+{
+    size_t n = (size_t)size;
+    st->size = size;
+    st->path = calloc(n, sizeof *st->path);
+    st->rays = calloc(n, sizeof *st->rays);
+    st->hits = calloc(n, sizeof *st->hits);
+    st->ray_slot = calloc(n, sizeof *st->ray_slot);
+    st->shade_slot = calloc(n, sizeof *st->shade_slot);
+    st->shade_material = calloc(n, sizeof *st->shade_material);
+    st->offsets = calloc(materials + 1, sizeof *st->offsets);
+    st->sorted = calloc(n, sizeof *st->sorted);
+    st->shadow = calloc(n, sizeof *st->shadow);
+    st->shadow_slot = calloc(n, sizeof *st->shadow_slot);
+    st->shadow_add = calloc(n, sizeof *st->shadow_add);
+    st->occluded = calloc(n, 1);
+    st->free_slots = calloc(n, sizeof *st->free_slots);
+    st->radiance = calloc(256 * STREAM_CHUNK_SAMPLES, sizeof *st->radiance);
+    return st->path && st->rays && st->hits && st->ray_slot && st->shade_slot && st->shade_material && st->offsets &&
+           st->sorted && st->shadow && st->shadow_slot && st->shadow_add && st->occluded && st->free_slots &&
+           st->radiance;
+}
+
+static double stage_clock(double *acc, double since)
+{
+    double now = lanes_render_clock();
+    *acc += now - since;
+    return now;
+}
+
+/* The paths (tile pixel p, sample s) for s in [s0, s1), streamed. */
+static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t *tile_pixel, int count, int s0, int s1,
+                         paths_counts *c)
+{
+    const lanes_scene *s = job->scene;
+    const int w = job->shade_k->lanes;
+    double *stage = c->stage_seconds;
+    packet_soa q;
+    int next = 0, total = count * (s1 - s0), live = 0, nfree = st->size;
+    for (int i = 0; i < st->size; i++) st->free_slots[i] = (uint32_t)(st->size - 1 - i), st->path[i].alive = false;
+    while (next < total || live > 0) {
+        /* generate: camera rays into the free slots, pixel by pixel within a sample */
+        double t = lanes_render_clock();
+        while (next < total && nfree > 0) {
+            uint32_t slot = st->free_slots[--nfree];
+            packet_lane *l = &st->path[slot];
+            memset(l, 0, sizeof *l);
+            int k = next++;
+            l->pixel = tile_pixel[k % count];
+            l->sample = (uint32_t)(s0 + k / count);
+            l->tile_index = (uint32_t)(k % count);
+            l->alive = l->after_delta = true;
+            l->beta = v3(1, 1, 1);
+            uint32_t px = l->pixel % (uint32_t)job->width, py = l->pixel / (uint32_t)job->width;
+            float sx = 0.5f, sy = 0.5f;
+            if (l->sample > 0)
+                sx = random01(l->pixel, l->sample, 0, DIM_PIXEL_X), sy = random01(l->pixel, l->sample, 0, DIM_PIXEL_Y);
+            l->o = job->view.eye;
+            l->d = lanes_view_dir(&job->view, (float)px + sx, (float)py + sy);
+            live++;
+            c->paths++;
+        }
+        /* the extension rays of the live paths, in slot order */
+        int nr = 0;
+        for (int i = 0; i < st->size; i++) {
+            packet_lane *l = &st->path[i];
+            if (!l->alive) continue;
+            st->rays[nr] = (lanes_ray){{l->o.x, l->o.y, l->o.z}, {l->d.x, l->d.y, l->d.z}, {0, 0, 0}, 0.0f, INFINITY};
+            lanes_ray_prepare_rcp(&st->rays[nr], job->rcp);
+            st->ray_slot[nr++] = (uint32_t)i;
+        }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_GENERATE], t);
+        job->trace_k->trace_wide(&job->accel->wide, job->accuracy, st->rays, (size_t)nr, st->hits, NULL);
+        t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
+        /* hits: background, emission; what is left to shade */
+        int ns = 0;
+        for (int r = 0; r < nr; r++) {
+            uint32_t slot = st->ray_slot[r];
+            packet_lane *l = &st->path[slot];
+            int depth = (int)l->ss_depth;
+            c->by_depth[depth]++;
+            const lanes_hit *h = &st->hits[r];
+            bool ends = false;
+            if (h->prim == LANES_NO_HIT) {
+                l->sum = v3_add(l->sum, v3_mul(l->beta, background(job, l->d)));
+                ends = true;
+            } else {
+                l->sf = lanes_surface_at(s, h, l->d);
+                l->material = s->material_of[h->prim];
+                const lanes_material *m = &s->materials[l->material];
+                if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
+                    bool counts = job->area_light_quad[l->material] ? l->after_delta && l->sf.front : true;
+                    if (counts) l->sum = v3_add(l->sum, v3_mul(l->beta, v3_load(m->emission)));
+                }
+                ends = m->kind == LANES_MAT_EMISSIVE;
+                if (!ends) {
+                    l->fr = frame_around(l->sf.front ? l->sf.nf : v3_scale(l->sf.nf, -1.0f));
+                    l->wo = to_local(&l->fr, v3_scale(v3_normalize(l->d), -1.0f));
+                    st->shade_slot[ns] = slot;
+                    st->shade_material[ns++] = l->material;
+                }
+            }
+            if (ends) l->alive = false;
+        }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
+        lanes_error err;
+        uint32_t nm = (uint32_t)(s->material_count ? s->material_count : 1);
+        if (ns > 0 && lanes_sort_by_material(st->shade_material, (size_t)ns, nm, st->offsets, st->sorted, &err) != LANES_OK) {
+            /* cannot happen: the materials are the scene's, checked at load */
+            for (int i = 0; i < ns; i++) st->sorted[i] = (uint32_t)i;
+        }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SORT], t);
+        /* shade in sorted order, W at a time within a material: the shadow
+         * rays' BSDF values, then the extension rays */
+        int nsh = 0;
+        for (int first = 0; first < ns;) {
+            uint32_t mat = st->shade_material[st->sorted[first]];
+            int end = first;
+            while (end < ns && st->shade_material[st->sorted[end]] == mat) end++;
+            const lanes_bsdf *b = &job->bsdf[mat];
+            bool delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
+            for (int b0 = first; b0 < end; b0 += w) {
+                int n = end - b0 < w ? end - b0 : w;
+                if (!delta) {
+                    int lit = 0, lit_lane[LANES_MAX_W];
+                    for (int i = 0; i < n; i++) {
+                        packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
+                        l->ls = light_pick(job, &l->sf, &l->fr, l->pixel, l->sample, l->ss_depth);
+                        if (!l->ls.active) continue;
+                        soa_put(q.wo, w, lit, l->wo);
+                        soa_put(q.wi, w, lit, l->ls.wi_local);
+                        lit_lane[lit++] = i;
+                    }
+                    if (lit > 0) {
+                        /* the lit lanes packed: a compact call of lit items */
+                        float wo_c[3 * LANES_MAX_W], wi_c[3 * LANES_MAX_W];
+                        for (int k = 0; k < 3; k++)
+                            for (int i = 0; i < lit; i++) wo_c[k * lit + i] = q.wo[k * w + i], wi_c[k * lit + i] = q.wi[k * w + i];
+                        job->shade_k->bsdf_eval(b, (size_t)lit, wo_c, wi_c, q.f, q.pdf);
+                        c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)lit;
+                        for (int j = 0; j < lit; j++) {
+                            uint32_t slot = st->shade_slot[st->sorted[b0 + lit_lane[j]]];
+                            packet_lane *l = &st->path[slot];
+                            vec3 f = v3(q.f[j], q.f[lit + j], q.f[2 * lit + j]);
+                            if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) continue;
+                            vec3 side = v3_dot(l->ls.wi, l->sf.nf) > 0.0f ? l->sf.nf : v3_scale(l->sf.nf, -1.0f);
+                            vec3 origin = lanes_offset_origin(&l->sf, side, job->accuracy, job->eps);
+                            vec3 path = v3_sub(l->ls.target, origin);
+                            float length = sqrtf(v3_dot(path, path));
+                            c->shadow++;
+                            if (!(length > 0.0f)) continue;
+                            vec3 dir = v3_scale(path, 1.0f / length);
+                            st->shadow[nsh] = (lanes_ray){{origin.x, origin.y, origin.z}, {dir.x, dir.y, dir.z}, {0, 0, 0},
+                                                          0.0f, length * (1.0f - 1e-4f)};
+                            lanes_ray_prepare_rcp(&st->shadow[nsh], job->rcp);
+                            st->shadow_slot[nsh] = slot;
+                            st->shadow_add[nsh++] = v3_mul(l->beta, v3_scale(v3_mul(f, l->ls.radiance), l->ls.scale));
+                        }
+                    }
+                }
+                float wo_c[3 * LANES_MAX_W], u_c[3 * LANES_MAX_W];
+                for (int i = 0; i < n; i++) {
+                    packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
+                    wo_c[i] = l->wo.x, wo_c[n + i] = l->wo.y, wo_c[2 * n + i] = l->wo.z;
+                    for (int k = 0; k < 3; k++) u_c[k * n + i] = random01(l->pixel, l->sample, l->ss_depth, DIM_BSDF_1 + (uint32_t)k);
+                }
+                job->shade_k->bsdf_sample(b, (size_t)n, wo_c, u_c, q.wi, q.w, q.pdf, q.flags);
+                c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)n;
+                for (int i = 0; i < n; i++) {
+                    packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
+                    l->pending_flags = q.flags[i];
+                    for (int k = 0; k < 3; k++) l->pending_wi[k] = q.wi[k * n + i], l->pending_w[k] = q.w[k * n + i];
+                }
+            }
+            first = end;
+        }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
+        /* the shadow stream, then each path's light before its next bounce
+         * (the order single-1lane adds them in) */
+        job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, st->shadow, (size_t)nsh, st->occluded, NULL);
+        for (int i = 0; i < nsh; i++)
+            if (!st->occluded[i]) {
+                packet_lane *l = &st->path[st->shadow_slot[i]];
+                l->sum = v3_add(l->sum, st->shadow_add[i]);
+            }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SHADOW], t);
+        for (int i = 0; i < ns; i++) {
+            uint32_t slot = st->shade_slot[i];
+            packet_lane *l = &st->path[slot];
+            bool go = (l->pending_flags & LANES_BSDF_VALID) != 0;
+            if (go) {
+                l->after_delta = (l->pending_flags & LANES_BSDF_DELTA) != 0;
+                go = continue_path(job, &l->sf, &l->fr, l->pending_wi, l->pending_w, (int)l->ss_depth, l->pixel,
+                                   l->sample, &l->beta, &l->o, &l->d);
+            }
+            l->ss_depth++;
+            if (!go || (int)l->ss_depth >= job->opt->depth) l->alive = false;
+        }
+        /* accumulate the finished paths and free their slots */
+        for (int r = 0; r < nr; r++) {
+            uint32_t slot = st->ray_slot[r];
+            packet_lane *l = &st->path[slot];
+            if (l->alive) continue;
+            st->radiance[(l->sample - (uint32_t)s0) * (uint32_t)count + l->tile_index] = l->sum;
+            st->free_slots[nfree++] = slot;
+            live--;
+        }
+        stage_clock(&stage[LANES_PATHS_STAGE_ACCUMULATE], t);
+    }
+}
+
+static void render_tile_stream(const paths_job *job, int x0, int y0, paths_counts *c)
+{
+    stream_state *st = c->stream;
+    uint32_t tile_pixel[256];
+    vec3 acc[256];
+    int count = 0;
+    for (int y = y0; y < y0 + 16 && y < job->height; y++)
+        for (int x = x0; x < x0 + 16 && x < job->width; x++)
+            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
+    for (int s0 = 0; s0 < job->opt->spp; s0 += STREAM_CHUNK_SAMPLES) {
+        int s1 = s0 + STREAM_CHUNK_SAMPLES < job->opt->spp ? s0 + STREAM_CHUNK_SAMPLES : job->opt->spp;
+        stream_chunk(job, st, tile_pixel, count, s0, s1, c);
+        for (int sm = s0; sm < s1; sm++)
+            for (int k = 0; k < count; k++) acc[k] = v3_add(acc[k], st->radiance[(sm - s0) * count + k]);
+    }
+    for (int k = 0; k < count; k++) {
+        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
+        out[0] = acc[k].x / (float)job->opt->spp, out[1] = acc[k].y / (float)job->opt->spp, out[2] = acc[k].z / (float)job->opt->spp;
+    }
+}
+
 /* ---- tiles and threads --------------------------------------------------- */
 
 static void render_tile(const paths_job *job, int tile, paths_counts *c)
@@ -504,6 +790,10 @@ static void render_tile(const paths_job *job, int tile, paths_counts *c)
     int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
     if (job->opt->method == LANES_PATHS_PACKET) {
         render_tile_packets(job, x0, y0, c);
+        return;
+    }
+    if (job->opt->method == LANES_PATHS_STREAM) {
+        render_tile_stream(job, x0, y0, c);
         return;
     }
     const int spp = job->opt->spp;
@@ -552,6 +842,13 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
                                "paths: instruction set '%s' is not available", lanes_isa_name(opt->isa));
     if ((unsigned)opt->method >= LANES_PATHS_METHOD_COUNT)
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: method %d unknown", (int)opt->method);
+    if (opt->method == LANES_PATHS_STREAM &&
+        (opt->stream < LANES_PATHS_MIN_STREAM || opt->stream > LANES_PATHS_MAX_STREAM || opt->stream % 16 != 0))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: stream size %d (%d..%d, a multiple of 16)", opt->stream,
+                               LANES_PATHS_MIN_STREAM, LANES_PATHS_MAX_STREAM);
+    if (opt->method == LANES_PATHS_STREAM && scene->material_count > LANES_SORT_MAX_MATERIALS)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: %zu materials; the stream's sort takes at most %u",
+                               scene->material_count, LANES_SORT_MAX_MATERIALS);
     job.shade_k = opt->method == LANES_PATHS_SINGLE ? lanes_kernels_for(LANES_ISA_SCALAR) : job.trace_k;
     if (!job.shade_k)
         return lanes_error_set(err, LANES_ERR_NOT_COMPILED, "paths: the scalar set is not compiled in");
@@ -597,10 +894,18 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
     int threads = lanes_parallel_threads(opt->threads);
     paths_counts *counts = calloc((size_t)threads, sizeof *counts);
-    if (!job.rgb || !counts) {
-        free(job.rgb), free(counts), free_job(&job);
-        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory for the image");
+    stream_state *streams = opt->method == LANES_PATHS_STREAM ? calloc((size_t)threads, sizeof *streams) : NULL;
+    bool ok = job.rgb && counts && (opt->method != LANES_PATHS_STREAM || streams);
+    for (int i = 0; ok && streams && i < threads; i++) {
+        ok = stream_alloc(&streams[i], opt->stream, scene->material_count);
+        counts[i].stream = &streams[i];
     }
+    if (!ok) {
+        for (int i = 0; streams && i < threads; i++) stream_free(&streams[i]);
+        free(streams), free(job.rgb), free(counts), free_job(&job);
+        return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory for the image or the streams");
+    }
+    if (streams) out->stream_bytes = stream_bytes(opt->stream, scene->material_count);
     job.tiles_x = (job.width + 15) / 16;
     job.tiles_y = (job.height + 15) / 16;
     double t0 = lanes_render_clock();
@@ -614,7 +919,10 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
         out->shade_slots += counts[i].shade_slots;
         out->shade_live += counts[i].shade_live;
         for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) out->rays_by_depth[d] += counts[i].by_depth[d];
+        for (int k = 0; k < LANES_PATHS_STAGE_COUNT; k++) out->stage_seconds[k] += counts[i].stage_seconds[k];
     }
+    for (int i = 0; streams && i < threads; i++) stream_free(&streams[i]);
+    free(streams);
     free(counts);
     free_job(&job);
     out->rgb = job.rgb;

@@ -25,7 +25,14 @@
  *                 together; at each bounce each material present shades
  *                 under its lane mask in one W-lane call; finished paths
  *                 leave their lanes empty. The same radiance as
- *                 single-1lane, bit for bit, per (pixel, sample).
+ *                 single-1lane, bit for bit, per (pixel, sample);
+ *   stream        per thread a stream of S paths in flight (their
+ *                 extension rays traced in one call, compact); the paths
+ *                 to shade sorted by material (a stable counting sort),
+ *                 shaded W at a time in that order, their shadow rays
+ *                 collected and traced in one call; finished paths' slots
+ *                 refilled with camera rays of the same 16x16 tile. The
+ *                 same radiance again, bit for bit.
  *
  * Compiled for the x86-64 baseline: per-ray work happens in the kernels. */
 #ifndef LANES_TRACE_PATHS_H
@@ -41,6 +48,7 @@ typedef enum lanes_paths_method {
     LANES_PATHS_SINGLE = 0,
     LANES_PATHS_SINGLE_1LANE,
     LANES_PATHS_PACKET,
+    LANES_PATHS_STREAM,
     LANES_PATHS_METHOD_COUNT
 } lanes_paths_method;
 
@@ -49,6 +57,19 @@ const char *lanes_paths_method_name(lanes_paths_method m);
 int lanes_paths_method_from_name(const char *name);
 
 #define LANES_PATHS_MAX_DEPTH 32
+#define LANES_PATHS_MIN_STREAM 256
+#define LANES_PATHS_MAX_STREAM 65536
+
+/* Where the stream method's time goes, summed over threads. */
+typedef enum lanes_paths_stage {
+    LANES_PATHS_STAGE_GENERATE = 0, /* camera rays into free slots; the stream's rays laid out */
+    LANES_PATHS_STAGE_INTERSECT,    /* the extension rays */
+    LANES_PATHS_STAGE_SORT,         /* by material */
+    LANES_PATHS_STAGE_SHADE,        /* hits, emission, BSDF values and samples, shadow rays made */
+    LANES_PATHS_STAGE_SHADOW,       /* the shadow rays traced, their light added */
+    LANES_PATHS_STAGE_ACCUMULATE,   /* paths continued or finished, slots freed */
+    LANES_PATHS_STAGE_COUNT
+} lanes_paths_stage;
 #define LANES_PATHS_MAX_SPP 65536
 
 typedef struct lanes_paths_options {
@@ -59,6 +80,7 @@ typedef struct lanes_paths_options {
     int spp;                 /* samples per pixel, 1 .. LANES_PATHS_MAX_SPP; one sample goes through the pixel's centre */
     int depth;               /* path vertices after the camera, 1 .. LANES_PATHS_MAX_DEPTH; default 8 */
     int threads;             /* 0: all cores */
+    int stream;              /* stream method: paths in flight per thread, 256 .. 65536, a multiple of 16; default 2048 */
     bool uniform_background; /* misses see `background` instead of the sky */
     float background[3];
 } lanes_paths_options;
@@ -75,6 +97,8 @@ typedef struct lanes_paths_result {
     /* Shading: kernel calls, the lane slots they offered and the lanes that
      * carried a hit; utilisation = live / slots. */
     uint64_t shade_calls, shade_slots, shade_live;
+    double stage_seconds[LANES_PATHS_STAGE_COUNT]; /* stream method */
+    size_t stream_bytes;                            /* stream method: each thread's stream state */
 } lanes_paths_result;
 
 /* accel: the wide BVH of opt->isa's set (lanes_render_accel_build). */
