@@ -8,6 +8,7 @@
 #include "bench/cli_commands.h"
 #include "bench/cli_common.h"
 #include "bench/image_io.h"
+#include "build/material_assign.h"
 #include "build/parallel.h"
 #include "build/scene_load.h"
 #include "trace/paths.h"
@@ -16,6 +17,8 @@
 static int paths_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
     const char *scene_spec = NULL, *out_path = NULL, *value, *method_name = "single", *accuracy_name = NULL;
+    const char *assign_name = "cluster";
+    int materials = 0;
     lanes_paths_options o;
     lanes_paths_default_options(&o);
     bool json = false;
@@ -32,6 +35,9 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         } else if (cli_value(&a, "--stream", &value)) {
             o.stream = (int)cli_parse_count(&a, "--stream", value, LANES_PATHS_MIN_STREAM, LANES_PATHS_MAX_STREAM);
             if (o.stream % 16 != 0) cli_usage_error(ctx, self, "--stream %d: a multiple of 16, please", o.stream);
+        } else if (cli_value(&a, "--materials", &value)) {
+            materials = (int)cli_parse_count(&a, "--materials", value, 1, LANES_ASSIGN_MAX_MATERIALS);
+        } else if (cli_value(&a, "--assign", &assign_name)) {
         } else if (cli_value(&a, "--threads", &value)) {
             o.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
         } else if (cli_value(&a, "--background", &value)) {
@@ -62,6 +68,8 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     if (accuracy_name && accuracy < 0)
         cli_usage_error(ctx, self, "unknown accuracy mode '%s' (fast, default, robust)", accuracy_name);
     o.accuracy = (lanes_accuracy)accuracy;
+    int assign = lanes_material_assign_from_name(assign_name);
+    if (assign < 0) cli_usage_error(ctx, self, "unknown assignment '%s' (object, cluster, random)", assign_name);
     if (out_path) cli_make_parent_dirs("paths: -o", out_path);
     o.isa = lanes_isa_current();
     const lanes_kernels *k = lanes_kernels_for(o.isa);
@@ -69,6 +77,10 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     lanes_scene scene;
     lanes_error err;
     if (lanes_scene_load(scene_spec, &scene, &err) != LANES_OK) cli_fail("%s", err.message);
+    if (materials > 0 && lanes_scene_assign_materials(&scene, materials, (lanes_material_assign)assign, &err) != LANES_OK) {
+        lanes_scene_free(&scene);
+        cli_fail("%s", err.message);
+    }
     lanes_render_accel accel;
     if (lanes_render_accel_build(&scene, k, false, o.threads, &accel, &err) != LANES_OK) {
         lanes_scene_free(&scene);
@@ -156,6 +168,9 @@ const cli_command cli_cmd_paths = {
              "                        W at a time; Afra et al. 2016)\n"
              "  --stream N            stream method: paths in flight per thread, 256..65536, a\n"
              "                        multiple of 16 (default 2048)\n"
+             "  --materials N         N generated materials (@mat0000 ...) instead of the scene's own\n"
+             "                        (lights keep theirs), 1..65000\n"
+             "  --assign A            how: object, cluster (cells of a 64^3 grid; default) or random\n"
              "  --spp N               samples per pixel (default 16)\n"
              "  --depth N             path vertices after the camera, 1..32 (default 8)\n"
              "  --background L        a uniform background of radiance L instead of the sky\n"

@@ -1,0 +1,84 @@
+/* Generated materials for the shading-coherence measurements (see
+ * material_assign.h). */
+#include "build/material_assign.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const assign_names[LANES_ASSIGN_COUNT] = {"object", "cluster", "random"};
+
+const char *lanes_material_assign_name(lanes_material_assign a)
+{
+    return (unsigned)a < LANES_ASSIGN_COUNT ? assign_names[a] : "?";
+}
+
+int lanes_material_assign_from_name(const char *name)
+{
+    for (int i = 0; i < LANES_ASSIGN_COUNT; i++)
+        if (strcmp(name, assign_names[i]) == 0) return i;
+    return -1;
+}
+
+static uint32_t mix(uint32_t x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+/* The grid cell of a triangle's centroid, 64 cells a side over the bounds. */
+static uint32_t cell_of(const float *v, const float lo[3], const float hi[3])
+{
+    uint32_t key = 0;
+    for (int a = 0; a < 3; a++) {
+        float c = (v[a] + v[3 + a] + v[6 + a]) / 3.0f, ext = hi[a] - lo[a];
+        int k = ext > 0.0f ? (int)((c - lo[a]) / ext * 64.0f) : 0;
+        k = k < 0 ? 0 : k > 63 ? 63 : k;
+        key = key * 64u + (uint32_t)k;
+    }
+    return key;
+}
+
+lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_material_assign mode, lanes_error *err)
+{
+    if (n < 1 || n > LANES_ASSIGN_MAX_MATERIALS)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "materials: %d generated materials (1..%d)", n,
+                               LANES_ASSIGN_MAX_MATERIALS);
+    if ((unsigned)mode >= LANES_ASSIGN_COUNT)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "materials: assignment %d unknown", (int)mode);
+    if (scene->material_count + (size_t)n > 65536)
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT,
+                               "materials: %d generated with the scene's %zu is more than the 65536 the stream sort takes",
+                               n, scene->material_count);
+    uint32_t first = (uint32_t)scene->material_count;
+    for (int i = 0; i < n; i++) {
+        lanes_material m;
+        memset(&m, 0, sizeof m);
+        snprintf(m.name, sizeof m.name, "@mat%04d", i);
+        m.kind = i % 8 == 7 ? LANES_MAT_MIRROR : LANES_MAT_DIFFUSE;
+        uint32_t h = mix((uint32_t)i * 3u + 1u);
+        for (int c = 0; c < 3; c++) m.color[c] = 0.15f + 0.7f * (float)((h >> (8 * c)) & 255u) / 255.0f;
+        m.ior = 1.5f;
+        lanes_status st = lanes_scene_add_material(scene, &m, NULL, err);
+        if (st != LANES_OK) return st;
+    }
+    float lo[3], hi[3];
+    lanes_scene_bounds(scene, lo, hi);
+    uint32_t run = 0, previous = 0;
+    for (size_t t = 0; t < scene->triangle_count; t++) {
+        uint32_t own = scene->material_of[t];
+        if (t > 0 && own != previous) run++;
+        previous = own;
+        if (own < first && scene->materials[own].kind == LANES_MAT_EMISSIVE) continue;
+        uint32_t key = mode == LANES_ASSIGN_OBJECT    ? mix(run * 2654435761u + 17u)
+                       : mode == LANES_ASSIGN_CLUSTER ? mix(cell_of(scene->verts + 9 * t, lo, hi) + 0x9e3779b9u)
+                                                      : mix((uint32_t)t * 2246822519u + 3u);
+        scene->material_of[t] = first + key % (uint32_t)n;
+    }
+    return LANES_OK;
+}
