@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "bench/cli_commands.h"
+#include "bench/study_paths.h"
 #include "bench/cli_common.h"
 #ifdef LANES_HAVE_COMPARE
 #include "bench/embree_adapter.h"
@@ -720,8 +721,8 @@ static void write_plots(const char *dir, const row_list *rows, char scenes[][64]
 
 static int study_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
-    const char *out_dir = "out/study", *value;
-    bool full = false, json = false;
+    const char *out_dir = NULL, *value;
+    bool full = false, json = false, paths = false;
     const char *scene_specs[16];
     int nspecs = 0;
     study_plan plan = {.reps = 3, .width = 256, .height = 256, .threads = 1, .packet = LANES_PACKET_MAX_RAYS};
@@ -735,6 +736,8 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
     while (cli_args_next(&a)) {
         if (cli_flag(&a, "--full")) {
             full = true;
+        } else if (cli_flag(&a, "--paths")) {
+            paths = true;
         } else if (cli_flag(&a, "--json")) {
             json = true;
         } else if (cli_value(&a, "--out", &out_dir)) {
@@ -760,6 +763,24 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
             cli_unknown_option(&a);
         }
     }
+    if (paths) {
+        /* the path tracer's study: every set but scalar (whose shading
+         * the single method uses anyway), scalar alone where it is all */
+        lanes_isa sets[LANES_ISA_COUNT];
+        int nsets = 0;
+        const lanes_isa *order = lanes_isa_ranked();
+        for (int i = LANES_ISA_COUNT - 1; i >= 0; i--)
+            if (lanes_isa_supported(order[i]) && order[i] != LANES_ISA_SCALAR &&
+                (ctx->forced_isa == LANES_ISA_NONE || order[i] == ctx->forced_isa))
+                sets[nsets++] = order[i];
+        if (nsets == 0) sets[nsets++] = LANES_ISA_SCALAR;
+        if (nspecs == 0) scene_specs[nspecs++] = full ? "sponza-bunny" : "default";
+        paths_study_options po = {out_dir ? out_dir : "out/paths", size_given ? plan.width : (full ? 256 : 128),
+                                  size_given ? plan.height : (full ? 256 : 128), full ? 16 : 8,
+                                  reps_given ? plan.reps : (full ? 5 : 3), plan.threads, json};
+        return lanes_study_paths(scene_specs, nspecs, sets, nsets, &po);
+    }
+    if (!out_dir) out_dir = "out/study";
     if (full) {
         plan.queue_sizes = full_sizes;
         plan.queue_size_count = 4;
@@ -874,7 +895,12 @@ const cli_command cli_cmd_study = {
              "with no scene: a short study of the embedded default scene; with --full and no\n"
              "scene: dragon, sponza-bunny, 20-bunnies and hairball at 512x512 (the thesis' set)\n"
              "  --full            thesis-sized sweep: queue sizes 256..16384, 512x512, 5 runs\n"
-             "  --out DIR         output folder (default out/study)\n"
+             "  --paths           the path tracer's study instead (Afra et al. 2016): methods,\n"
+             "                    stream sizes 256..16384 and 1..256 clustered materials at every\n"
+             "                    set but scalar; 128x128, 8 spp (a tile fills a 2048-path stream;\n"
+             "                    --full: sponza-bunny, 256x256,\n"
+             "                    16 spp, 5 runs); into out/paths unless --out\n"
+             "  --out DIR         output folder (default out/study, --paths: out/paths)\n"
              "  --size WxH        image size (default 256x256; --full: 512x512)\n"
              "  --reps N          timed runs per configuration, median reported (default 3)\n"
              "  --packet N        rays per packet (default 1024)\n"

@@ -1,0 +1,349 @@
+/* `lanes study --paths` (see study_paths.h). Three experiments per scene,
+ * each configuration timed reps times (the median kept), interleaved by
+ * round so that the machine's load falls on all alike:
+ *   methods:   single, single-1lane, packet and stream at each set, the
+ *              scene's own materials: Mrays/s, shading utilisation, and
+ *              the stream's shading time;
+ *   stream:    the stream method's utilisation and speed against the
+ *              stream's size, 256 .. 16384 paths, with 36 clustered
+ *              materials (the paper's smaller scene);
+ *   materials: packet and stream (2048) against the number of clustered
+ *              materials, 1 .. 256.
+ * Utilisation does not depend on the run (the paths are the same); time
+ * does. */
+#include "bench/study_paths.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bench/cli_common.h"
+#include "build/material_assign.h"
+#include "build/scene_load.h"
+#include "trace/paths.h"
+
+typedef struct {
+    char scene[64], experiment[16];
+    lanes_paths_method method;
+    lanes_isa isa;
+    int lanes, materials, stream, spp;
+    double mrays[64], utilization, shading_seconds[64];
+} paths_row;
+
+typedef struct {
+    paths_row *rows;
+    size_t count, capacity;
+} paths_rows;
+
+static paths_row *add(paths_rows *l)
+{
+    if (l->count == l->capacity) {
+        size_t cap = l->capacity ? 2 * l->capacity : 64;
+        paths_row *r = realloc(l->rows, cap * sizeof *r);
+        if (!r) cli_fail("study --paths: out of memory");
+        l->rows = r, l->capacity = cap;
+    }
+    paths_row *r = &l->rows[l->count++];
+    memset(r, 0, sizeof *r);
+    return r;
+}
+
+/* One scene as a configuration renders it: its own materials (0) or n
+ * clustered ones; the wide BVH of each width built once. */
+typedef struct {
+    lanes_scene scene;
+    lanes_render_accel accel[17];
+} study_scene;
+
+static void scene_open(study_scene *s, const char *spec, int materials)
+{
+    lanes_error err;
+    memset(s, 0, sizeof *s);
+    if (lanes_scene_load(spec, &s->scene, &err) != LANES_OK) cli_fail("%s", err.message);
+    if (materials > 0 && lanes_scene_assign_materials(&s->scene, materials, LANES_ASSIGN_CLUSTER, &err) != LANES_OK)
+        cli_fail("%s", err.message);
+}
+
+static const lanes_render_accel *scene_accel(study_scene *s, lanes_isa isa)
+{
+    const lanes_kernels *k = lanes_kernels_for(isa);
+    lanes_render_accel *a = &s->accel[k->wide_width];
+    lanes_error err;
+    if (a->wide.width == 0 && lanes_render_accel_build(&s->scene, k, false, 0, a, &err) != LANES_OK)
+        cli_fail("%s", err.message);
+    return a;
+}
+
+static void scene_close(study_scene *s)
+{
+    for (int w = 0; w <= 16; w++)
+        if (s->accel[w].wide.width) lanes_render_accel_free(&s->accel[w]);
+    lanes_scene_free(&s->scene);
+}
+
+static void measure(paths_row *r, study_scene *s, const paths_study_options *o, int round)
+{
+    lanes_paths_options po;
+    lanes_paths_default_options(&po);
+    po.isa = r->isa, po.method = r->method, po.spp = r->spp, po.threads = o->threads;
+    po.width = o->width, po.height = o->height;
+    po.stream = r->stream;
+    lanes_paths_result res;
+    lanes_error err;
+    if (lanes_paths_render(&s->scene, scene_accel(s, r->isa), &po, &res, &err) != LANES_OK)
+        cli_fail("study --paths: %s", err.message);
+    uint64_t rays = res.shadow_rays;
+    for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) rays += res.rays_by_depth[d];
+    r->mrays[round] = res.seconds > 0.0 ? (double)rays / res.seconds * 1e-6 : 0.0;
+    r->utilization = res.shade_slots ? (double)res.shade_live / (double)res.shade_slots : 0.0;
+    r->shading_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_SHADE];
+    lanes_paths_result_free(&res);
+}
+
+static double median(const double *v, int n)
+{
+    double tmp[64];
+    memcpy(tmp, v, (size_t)n * sizeof *tmp);
+    return cli_median(tmp, (size_t)n);
+}
+
+/* ---- output -------------------------------------------------------------- */
+
+static void write_csv(const char *path, const paths_rows *rows, int reps)
+{
+    FILE *f = cli_create_file("study --paths", path);
+    fprintf(f, "scene,experiment,method,isa,lanes,materials,stream,spp,mrays,shading_utilization,shading_seconds\n");
+    for (size_t i = 0; i < rows->count; i++) {
+        const paths_row *r = &rows->rows[i];
+        fprintf(f, "%s,%s,%s,%s,%d,%d,%d,%d,%.4f,%.4f,%.5f\n", r->scene, r->experiment, lanes_paths_method_name(r->method),
+                lanes_isa_name(r->isa), r->lanes, r->materials, r->stream, r->spp, median(r->mrays, reps), r->utilization,
+                median(r->shading_seconds, reps));
+    }
+    cli_finish_file("study --paths", path, f);
+}
+
+static void write_json(const paths_rows *rows, int reps, const char *dir)
+{
+    printf("{\"cpu\": ");
+    cli_json_string(stdout, lanes_cpu()->brand);
+    printf(", \"out\": ");
+    cli_json_string(stdout, dir);
+    printf(", \"rows\": [");
+    for (size_t i = 0; i < rows->count; i++) {
+        const paths_row *r = &rows->rows[i];
+        printf("%s{\"scene\": ", i ? ", " : "");
+        cli_json_string(stdout, r->scene);
+        printf(", \"experiment\": \"%s\", \"method\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"materials\": %d, "
+               "\"stream\": %d, \"spp\": %d, \"mrays\": ",
+               r->experiment, lanes_paths_method_name(r->method), lanes_isa_name(r->isa), r->lanes, r->materials,
+               r->stream, r->spp);
+        cli_json_number(stdout, median(r->mrays, reps));
+        printf(", \"shading_utilization\": ");
+        cli_json_number(stdout, r->utilization);
+        printf(", \"shading_seconds\": ");
+        cli_json_number(stdout, median(r->shading_seconds, reps));
+        printf("}");
+    }
+    printf("]}\n");
+}
+
+static const paths_row *find(const paths_rows *rows, const char *scene, const char *experiment, lanes_paths_method m,
+                             lanes_isa isa, int materials, int stream)
+{
+    for (size_t i = 0; i < rows->count; i++) {
+        const paths_row *r = &rows->rows[i];
+        if (strcmp(r->scene, scene) == 0 && strcmp(r->experiment, experiment) == 0 && r->method == m && r->isa == isa &&
+            (materials < 0 || r->materials == materials) && (stream < 0 || r->stream == stream))
+            return r;
+    }
+    return NULL;
+}
+
+static const int stream_sizes[] = {256, 512, 1024, 2048, 4096, 8192, 16384};
+static const int material_counts[] = {1, 4, 16, 64, 256};
+enum { NSTREAM = sizeof stream_sizes / sizeof stream_sizes[0], NMAT = sizeof material_counts / sizeof material_counts[0] };
+
+static void write_tables(const char *path, const paths_rows *rows, char scenes[][64], int nscenes, const lanes_isa *sets,
+                         int nsets, const paths_study_options *o)
+{
+    FILE *f = cli_create_file("study --paths", path);
+    fprintf(f, "# Path tracing with shading coherence (Afra et al. 2016)\n\n");
+    fprintf(f, "CPU: %s; %dx%d, %d spp, %d thread(s), median of %d runs.\n", lanes_cpu()->brand, o->width, o->height,
+            o->spp, o->threads, o->reps);
+    for (int s = 0; s < nscenes; s++) {
+        fprintf(f, "\n## %s: methods (the scene's own materials)\n\n", scenes[s]);
+        fprintf(f, "| set | lanes | method | Mrays/s | vs single | shading utilisation |\n|---|---|---|---|---|---|\n");
+        for (int j = 0; j < nsets; j++) {
+            const paths_row *single = find(rows, scenes[s], "methods", LANES_PATHS_SINGLE, sets[j], -1, -1);
+            for (int m = 0; m < LANES_PATHS_METHOD_COUNT; m++) {
+                const paths_row *r = find(rows, scenes[s], "methods", (lanes_paths_method)m, sets[j], -1, -1);
+                if (!r) continue;
+                double mr = median(r->mrays, o->reps), base = single ? median(single->mrays, o->reps) : 0.0;
+                fprintf(f, "| %s | %d | %s | %.2f | %.2f | %.3f |\n", lanes_isa_name(sets[j]), r->lanes,
+                        lanes_paths_method_name(r->method), mr, base > 0.0 ? mr / base : 0.0, r->utilization);
+            }
+        }
+        fprintf(f, "\n## %s: stream size (36 clustered materials; at least paths / 256 samples per pixel, so that a "
+                   "tile's paths fill the stream): shading utilisation / Mrays/s\n\n| paths |", scenes[s]);
+        for (int j = 0; j < nsets; j++) fprintf(f, " %s |", lanes_isa_name(sets[j]));
+        fprintf(f, "\n|---|");
+        for (int j = 0; j < nsets; j++) fprintf(f, "---|");
+        fprintf(f, "\n");
+        for (int k = 0; k < NSTREAM; k++) {
+            fprintf(f, "| %d |", stream_sizes[k]);
+            for (int j = 0; j < nsets; j++) {
+                const paths_row *r = find(rows, scenes[s], "stream", LANES_PATHS_STREAM, sets[j], -1, stream_sizes[k]);
+                if (r) fprintf(f, " %.3f / %.2f |", r->utilization, median(r->mrays, o->reps));
+                else fprintf(f, " |");
+            }
+            fprintf(f, "\n");
+        }
+        fprintf(f, "\n## %s: clustered materials: shading utilisation, packet / stream\n\n| materials |", scenes[s]);
+        for (int j = 0; j < nsets; j++) fprintf(f, " %s |", lanes_isa_name(sets[j]));
+        fprintf(f, "\n|---|");
+        for (int j = 0; j < nsets; j++) fprintf(f, "---|");
+        fprintf(f, "\n");
+        for (int k = 0; k < NMAT; k++) {
+            fprintf(f, "| %d |", material_counts[k]);
+            for (int j = 0; j < nsets; j++) {
+                const paths_row *p = find(rows, scenes[s], "materials", LANES_PATHS_PACKET, sets[j], material_counts[k], -1);
+                const paths_row *q = find(rows, scenes[s], "materials", LANES_PATHS_STREAM, sets[j], material_counts[k], -1);
+                fprintf(f, " %.3f / %.3f |", p ? p->utilization : 0.0, q ? q->utilization : 0.0);
+            }
+            fprintf(f, "\n");
+        }
+    }
+    cli_finish_file("study --paths", path, f);
+}
+
+/* One data file per plotted line; gnuplot draws them. */
+static void write_plots(const char *dir, const paths_rows *rows, const char *scene, const lanes_isa *sets, int nsets)
+{
+    char path[1200], plot_stream[4096] = "", plot_mat[4096] = "";
+    for (int j = 0; j < nsets; j++) {
+        const char *isa = lanes_isa_name(sets[j]);
+        snprintf(path, sizeof path, "%s/util_stream_%s.dat", dir, isa);
+        FILE *f = cli_create_file("study --paths", path);
+        for (int k = 0; k < NSTREAM; k++) {
+            const paths_row *r = find(rows, scene, "stream", LANES_PATHS_STREAM, sets[j], -1, stream_sizes[k]);
+            if (r) fprintf(f, "%d %.4f\n", stream_sizes[k], r->utilization);
+        }
+        cli_finish_file("study --paths", path, f);
+        size_t used = strlen(plot_stream);
+        snprintf(plot_stream + used, sizeof plot_stream - used, "%s'util_stream_%s.dat' with linespoints title '%s'",
+                 j ? ", " : "", isa, isa);
+        for (int m = LANES_PATHS_PACKET; m <= LANES_PATHS_STREAM; m++) {
+            const char *method = lanes_paths_method_name((lanes_paths_method)m);
+            snprintf(path, sizeof path, "%s/util_materials_%s_%s.dat", dir, method, isa);
+            f = cli_create_file("study --paths", path);
+            for (int k = 0; k < NMAT; k++) {
+                const paths_row *r = find(rows, scene, "materials", (lanes_paths_method)m, sets[j], material_counts[k], -1);
+                if (r) fprintf(f, "%d %.4f\n", material_counts[k], r->utilization);
+            }
+            cli_finish_file("study --paths", path, f);
+            used = strlen(plot_mat);
+            snprintf(plot_mat + used, sizeof plot_mat - used, "%s'util_materials_%s_%s.dat' with linespoints title '%s %s'",
+                     used ? ", " : "", method, isa, method, isa);
+        }
+    }
+    if (system("command -v gnuplot >/dev/null 2>&1") != 0) {
+        fprintf(stderr, "study --paths: gnuplot not found (install gnuplot-nox); the data files are written\n");
+        return;
+    }
+    char script[10000];
+    snprintf(script, sizeof script,
+             "set terminal pngcairo size 900,500\nset grid\nset key outside right\nset logscale x 2\nset yrange [0:1.05]\n"
+             "set ylabel 'shading SIMD utilisation'\n"
+             "set output 'util_vs_stream.png'\nset xlabel 'paths per stream'\nset title '%s: stream size'\nplot %s\n"
+             "set output 'util_vs_materials.png'\nset xlabel 'materials (clustered)'\nset title '%s: materials'\nplot %s\n",
+             scene, plot_stream, scene, plot_mat);
+    snprintf(path, sizeof path, "%s/paths.gp", dir);
+    FILE *f = cli_create_file("study --paths", path);
+    fputs(script, f);
+    cli_finish_file("study --paths", path, f);
+    char cmd[1400];
+    snprintf(cmd, sizeof cmd, "cd '%s' && gnuplot paths.gp 2>gnuplot.log", dir);
+    if (system(cmd) != 0) fprintf(stderr, "study --paths: gnuplot failed (see %s/gnuplot.log)\n", dir);
+}
+
+int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *sets, int nsets,
+                      const paths_study_options *o)
+{
+    cli_make_dirs("study --paths", o->out_dir);
+    paths_rows rows = {0};
+    char scenes[16][64];
+    for (int s = 0; s < nspecs; s++) {
+        /* the rows of this scene, then their rounds */
+        size_t first = rows.count;
+        study_scene own, clustered36, by_materials[NMAT];
+        scene_open(&own, specs[s], 0);
+        snprintf(scenes[s], sizeof scenes[s], "%.63s", own.scene.name);
+        scene_open(&clustered36, specs[s], 36);
+        for (int k = 0; k < NMAT; k++) scene_open(&by_materials[k], specs[s], material_counts[k]);
+        for (int j = 0; j < nsets; j++) {
+            int lanes = lanes_kernels_for(sets[j])->lanes;
+            for (int m = 0; m < LANES_PATHS_METHOD_COUNT; m++) {
+                paths_row *r = add(&rows);
+                snprintf(r->scene, sizeof r->scene, "%.63s", scenes[s]);
+                snprintf(r->experiment, sizeof r->experiment, "methods");
+                r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes;
+                r->materials = (int)own.scene.material_count, r->stream = 2048, r->spp = o->spp;
+            }
+            for (int k = 0; k < NSTREAM; k++) {
+                paths_row *r = add(&rows);
+                snprintf(r->scene, sizeof r->scene, "%.63s", scenes[s]);
+                snprintf(r->experiment, sizeof r->experiment, "stream");
+                r->method = LANES_PATHS_STREAM, r->isa = sets[j], r->lanes = lanes, r->materials = 36;
+                r->stream = stream_sizes[k];
+                /* a stream fills from one tile's paths: enough samples
+                 * that 256 pixels' worth can fill it */
+                r->spp = o->spp > stream_sizes[k] / 256 ? o->spp : stream_sizes[k] / 256;
+            }
+            for (int k = 0; k < NMAT; k++)
+                for (int m = LANES_PATHS_PACKET; m <= LANES_PATHS_STREAM; m++) {
+                    paths_row *r = add(&rows);
+                    snprintf(r->scene, sizeof r->scene, "%.63s", scenes[s]);
+                    snprintf(r->experiment, sizeof r->experiment, "materials");
+                    r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes;
+                    r->materials = material_counts[k], r->stream = 2048, r->spp = o->spp;
+                }
+        }
+        size_t total = rows.count - first;
+        for (int round = 0; round < o->reps; round++)
+            for (size_t i = first; i < rows.count; i++) {
+                paths_row *r = &rows.rows[i];
+                study_scene *sc = strcmp(r->experiment, "methods") == 0 ? &own
+                                  : strcmp(r->experiment, "stream") == 0 ? &clustered36
+                                                                         : NULL;
+                for (int k = 0; !sc && k < NMAT; k++)
+                    if (material_counts[k] == r->materials) sc = &by_materials[k];
+                if (!o->json && isatty(2))
+                    fprintf(stderr, "\r%s: %zu of %zu", scenes[s], (size_t)round * total + (i - first) + 1,
+                            total * (size_t)o->reps);
+                measure(r, sc, o, round);
+            }
+        if (!o->json && isatty(2)) fprintf(stderr, "\n");
+        scene_close(&own);
+        scene_close(&clustered36);
+        for (int k = 0; k < NMAT; k++) scene_close(&by_materials[k]);
+    }
+    char path[1200];
+    snprintf(path, sizeof path, "%s/paths.csv", o->out_dir);
+    write_csv(path, &rows, o->reps);
+    snprintf(path, sizeof path, "%s/tables.md", o->out_dir);
+    write_tables(path, &rows, scenes, nspecs, sets, nsets, o);
+    write_plots(o->out_dir, &rows, scenes[0], sets, nsets);
+    if (o->json) {
+        write_json(&rows, o->reps, o->out_dir);
+    } else {
+        FILE *t = fopen(path, "r");
+        char line[1024];
+        while (t && fgets(line, sizeof line, t)) fputs(line, stdout);
+        if (t) fclose(t);
+        printf("\nwrote %s/paths.csv, %s/tables.md, util_vs_stream.png and util_vs_materials.png\n", o->out_dir,
+               o->out_dir);
+    }
+    free(rows.rows);
+    return 0;
+}
