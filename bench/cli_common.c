@@ -204,6 +204,13 @@ unsigned long cli_parse_count(const cli_args *a, const char *option, const char 
     return v;
 }
 
+void cli_parse_size(const cli_args *a, const char *option, const char *text, int max, int *w, int *h)
+{
+    char tail;
+    if (sscanf(text, "%dx%d%c", w, h, &tail) != 2 || *w < 1 || *h < 1 || *w > max || *h > max)
+        cli_usage_error(a->ctx, a->cmd, "%s wants WIDTHxHEIGHT, each 1..%d, not '%s'", option, max, text);
+}
+
 double cli_parse_real(const cli_args *a, const char *option, const char *text, double min, double max)
 {
     char *end;

@@ -96,6 +96,9 @@ _Noreturn void cli_unknown_option(const cli_args *a);
 /* A decimal integer in [min, max]; anything else is a usage error naming the option. */
 unsigned long cli_parse_count(const cli_args *a, const char *option, const char *text,
                               unsigned long min, unsigned long max);
+/* WIDTHxHEIGHT, each 1..max, into *w and *h; anything else is a usage error
+ * naming the option. */
+void cli_parse_size(const cli_args *a, const char *option, const char *text, int max, int *w, int *h);
 /* A finite real number in [min, max]; anything else is a usage error naming the option. */
 double cli_parse_real(const cli_args *a, const char *option, const char *text, double min, double max);
 

@@ -45,13 +45,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
             o.uniform_background = true;
             o.background[0] = o.background[1] = o.background[2] = (float)g;
         } else if (cli_value(&a, "--size", &value)) {
-            int w = 0, h = 0;
-            char tail;
-            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > LANES_CAMERA_MAX_SIDE ||
-                h > LANES_CAMERA_MAX_SIDE)
-                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..%d, not '%s'", LANES_CAMERA_MAX_SIDE,
-                                value);
-            o.width = w, o.height = h;
+            cli_parse_size(&a, "--size", value, LANES_CAMERA_MAX_SIDE, &o.width, &o.height);
         } else if (cli_flag(&a, "--json")) {
             json = true;
         } else if (cli_global_option(&a)) {

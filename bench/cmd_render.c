@@ -67,14 +67,7 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
         } else if (cli_value(&a, "--depth", &value)) {
             po.base.max_depth = (int)cli_parse_count(&a, "--depth", value, 0, LANES_MAX_DEPTH);
         } else if (cli_value(&a, "--size", &value)) {
-            int w = 0, h = 0;
-            char tail;
-            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > LANES_CAMERA_MAX_SIDE ||
-                h > LANES_CAMERA_MAX_SIDE)
-                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..%d, not '%s'", LANES_CAMERA_MAX_SIDE,
-                                value);
-            po.base.width = w;
-            po.base.height = h;
+            cli_parse_size(&a, "--size", value, LANES_CAMERA_MAX_SIDE, &po.base.width, &po.base.height);
         } else if (cli_flag(&a, "--no-frustum")) {
             no_frustum = true;
         } else if (cli_flag(&a, "--explain")) {

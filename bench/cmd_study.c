@@ -749,11 +749,7 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         } else if (cli_value(&a, "--packet", &value)) {
             plan.packet = (int)cli_parse_count(&a, "--packet", value, 16, LANES_PACKET_MAX_RAYS);
         } else if (cli_value(&a, "--size", &value)) {
-            int w = 0, h = 0;
-            char tail;
-            if (sscanf(value, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 8192 || h > 8192)
-                cli_usage_error(ctx, self, "--size wants WIDTHxHEIGHT, each 1..8192, not '%s'", value);
-            plan.width = w, plan.height = h;
+            cli_parse_size(&a, "--size", value, 8192, &plan.width, &plan.height);
             size_given = true;
         } else if (cli_global_option(&a)) {
         } else if (a.argv[a.i][0] != '-') {

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "simd/counter_random.h"
+
 static const char *const assign_names[LANES_ASSIGN_COUNT] = {"object", "cluster", "random"};
 
 const char *lanes_material_assign_name(lanes_material_assign a)
@@ -19,16 +21,6 @@ int lanes_material_assign_from_name(const char *name)
     for (int i = 0; i < LANES_ASSIGN_COUNT; i++)
         if (strcmp(name, assign_names[i]) == 0) return i;
     return -1;
-}
-
-static uint32_t mix(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
 }
 
 /* The grid cell of a triangle's centroid, 64 cells a side over the bounds. */
@@ -61,7 +53,7 @@ lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_mater
         memset(&m, 0, sizeof m);
         snprintf(m.name, sizeof m.name, "@mat%04d", i);
         m.kind = i % 8 == 7 ? LANES_MAT_MIRROR : LANES_MAT_DIFFUSE;
-        uint32_t h = mix((uint32_t)i * 3u + 1u);
+        uint32_t h = lanes_hash32((uint32_t)i * 3u + 1u);
         for (int c = 0; c < 3; c++) m.color[c] = 0.15f + 0.7f * (float)((h >> (8 * c)) & 255u) / 255.0f;
         m.ior = 1.5f;
         lanes_status st = lanes_scene_add_material(scene, &m, NULL, err);
@@ -75,9 +67,9 @@ lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_mater
         if (t > 0 && own != previous) run++;
         previous = own;
         if (own < first && scene->materials[own].kind == LANES_MAT_EMISSIVE) continue;
-        uint32_t key = mode == LANES_ASSIGN_OBJECT    ? mix(run * 2654435761u + 17u)
-                       : mode == LANES_ASSIGN_CLUSTER ? mix(cell_of(scene->verts + 9 * t, lo, hi) + 0x9e3779b9u)
-                                                      : mix((uint32_t)t * 2246822519u + 3u);
+        uint32_t key = mode == LANES_ASSIGN_OBJECT    ? lanes_hash32(run * 2654435761u + 17u)
+                       : mode == LANES_ASSIGN_CLUSTER ? lanes_hash32(cell_of(scene->verts + 9 * t, lo, hi) + 0x9e3779b9u)
+                                                      : lanes_hash32((uint32_t)t * 2246822519u + 3u);
         scene->material_of[t] = first + key % (uint32_t)n;
     }
     return LANES_OK;

@@ -19,6 +19,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/include/lanes/lanes.h
 file(GLOB lanes_simd_backends CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/simd/vec*.h)
 install(FILES ${PROJECT_SOURCE_DIR}/simd/simd.h ${PROJECT_SOURCE_DIR}/simd/kernel_sets.h
               ${PROJECT_SOURCE_DIR}/simd/vmath.h ${PROJECT_SOURCE_DIR}/simd/vrandom.h
+              ${PROJECT_SOURCE_DIR}/simd/counter_random.h
               ${lanes_simd_backends}
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/lanes/simd)
 install(FILES ${PROJECT_SOURCE_DIR}/cmake/LanesIsa.cmake DESTINATION ${LANES_INSTALL_CMAKEDIR})

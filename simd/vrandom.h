@@ -8,7 +8,8 @@
  * twice), a bijection on 32 bits with low avalanche bias; the four counters
  * are folded in one after another, each through the whole function.
  * tests/test_simd_math_set.c checks every set against a plain C copy, bit
- * for bit and in permuted lanes, and the uniformity of the floats.
+ * for bit and in permuted lanes, and the uniformity of the floats. Its
+ * plain C twin for one value, for baseline code: simd/counter_random.h.
  *
  * Included by per-ISA files; everything is static inline. */
 #ifndef LANES_SIMD_VRANDOM_H

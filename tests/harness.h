@@ -11,6 +11,7 @@
  *   harness_summary(name)   "name: 12 checks, 0 failed" (and skipped); the
  *                           exit status for main: 1 when anything failed.
  *   harness_rng             splitmix64: the same numbers on every machine.
+ *   harness_in_list(l, n)   n is in the comma-separated list l (NULL: all).
  *
  * One translation unit per test program: the counters are static. */
 #ifndef LANES_TESTS_HARNESS_H
@@ -20,6 +21,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 
 #if defined(__GNUC__)
 #define HARNESS_PRINTF(f, a) __attribute__((format(printf, f, a)))
@@ -104,6 +106,22 @@ static inline uint64_t harness_next(harness_rng *r)
 static inline double harness_uniform(harness_rng *r)
 {
     return (double)(harness_next(r) >> 11) * 0x1p-53;
+}
+
+/* Whether name is in a comma-separated list (NULL: every name), for a
+ * test's --isa a,b,... option. */
+static inline bool harness_in_list(const char *list, const char *name)
+{
+    if (!list) return true;
+    size_t len = strlen(name);
+    for (const char *p = list; *p;) {
+        const char *e = strchr(p, ',');
+        size_t l = e ? (size_t)(e - p) : strlen(p);
+        if (l == len && strncmp(p, name, len) == 0) return true;
+        if (!e) break;
+        p = e + 1;
+    }
+    return false;
 }
 
 #endif

@@ -409,20 +409,6 @@ static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r)
     }
 }
 
-static bool in_list(const char *list, const char *name)
-{
-    if (!list) return true;
-    size_t len = strlen(name);
-    for (const char *p = list; *p;) {
-        const char *e = strchr(p, ',');
-        size_t l = e ? (size_t)(e - p) : strlen(p);
-        if (l == len && strncmp(p, name, len) == 0) return true;
-        if (!e) break;
-        p = e + 1;
-    }
-    return false;
-}
-
 int main(int argc, char **argv)
 {
     const char *isa_list = NULL;
@@ -443,7 +429,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
         const char *name = lanes_isa_name(isa);
-        if (!in_list(isa_list, name) || !lanes_isa_compiled(isa)) continue;
+        if (!harness_in_list(isa_list, name) || !lanes_isa_compiled(isa)) continue;
         if (!lanes_isa_cpu_can_run(isa)) {
             printf("SKIP %s: this CPU cannot run it\n", name);
             harness_skip();

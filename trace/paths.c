@@ -10,6 +10,7 @@
 
 #include "build/camera.h"
 #include "build/parallel.h"
+#include "simd/counter_random.h"
 #include "trace/material_sort.h"
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
@@ -39,26 +40,9 @@ void lanes_paths_default_options(lanes_paths_options *o)
     o->stream = 2048;
 }
 
-/* ---- random numbers: simd/vrandom.h's function, for one lane ------------ */
-
-static uint32_t hash32(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
 /* The dimensions a path vertex draws. */
 enum { DIM_PIXEL_X, DIM_PIXEL_Y, DIM_LIGHT, DIM_LIGHT_U, DIM_LIGHT_V, DIM_BSDF_1, DIM_BSDF_2, DIM_BSDF_3, DIM_ROULETTE };
 
-static float random01(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dim)
-{
-    uint32_t h = hash32(hash32(hash32(hash32(pixel) + sample) + depth) + dim);
-    return (float)(h >> 8) * 0x1p-24f;
-}
 
 /* ---- the scene as the integrator reads it ------------------------------ */
 
@@ -159,12 +143,10 @@ static lanes_hit trace(const paths_job *job, vec3 o, vec3 d, float tfar)
     return h;
 }
 
-static bool occluded(const paths_job *job, vec3 o, vec3 d, float tfar)
+static bool occluded(const paths_job *job, const lanes_ray *r)
 {
-    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
     uint8_t hit = 0;
-    lanes_ray_prepare_rcp(&r, job->rcp);
-    job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, &r, 1, &hit, NULL);
+    job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, r, 1, &hit, NULL);
     return hit != 0;
 }
 
@@ -222,7 +204,7 @@ static light_sample light_pick(const paths_job *job, const lanes_surface *sf, co
     memset(&ls, 0, sizeof ls);
     if (job->light_count == 0) return ls;
     const lanes_scene *s = job->scene;
-    float u = random01(pixel, sample, depth, DIM_LIGHT);
+    float u = lanes_random01(pixel, sample, depth, DIM_LIGHT);
     size_t k = 0;
     while (k + 1 < job->light_count && job->light_cdf[k + 1] <= u) k++;
     float pick = job->light_cdf[k + 1] - job->light_cdf[k];
@@ -230,7 +212,7 @@ static light_sample light_pick(const paths_job *job, const lanes_surface *sf, co
     float geometry; /* the light's area times its cosine, or 1 for a point */
     if (l->area) {
         const lanes_area_light *al = &s->area_lights[l->index];
-        float a = random01(pixel, sample, depth, DIM_LIGHT_U), bb = random01(pixel, sample, depth, DIM_LIGHT_V);
+        float a = lanes_random01(pixel, sample, depth, DIM_LIGHT_U), bb = lanes_random01(pixel, sample, depth, DIM_LIGHT_V);
         ls.target = v3_add(v3_load(al->corner), v3_add(v3_scale(v3_load(al->edge_u), a), v3_scale(v3_load(al->edge_v), bb)));
         ls.radiance = v3_load(al->emission);
         geometry = l->area_size;
@@ -254,25 +236,40 @@ static light_sample light_pick(const paths_job *job, const lanes_surface *sf, co
     return ls;
 }
 
-/* The light the sample brings through the BSDF value f, once its shadow
- * ray is traced. */
-static vec3 light_finish(const paths_job *job, const lanes_surface *sf, const light_sample *ls, vec3 f,
-                         paths_counts *c)
+/* The shadow ray toward a light sample, prepared for tracing; false when
+ * it has no length. It leaves from off the surface, on the light's side,
+ * and must stop short of the light by its own length from there: a
+ * visible parallelogram is geometry too, and measured from sf->p the ray
+ * ran past the target (by the offset over the sine of its angle) into the
+ * light's own triangles. */
+static bool shadow_ray(const paths_job *job, const lanes_surface *sf, const light_sample *ls, lanes_ray *r)
 {
-    if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) return v3(0, 0, 0);
-    /* The shadow ray leaves from off the surface, on the light's side, and
-     * must stop short of the light by its own length from there: a visible
-     * parallelogram is geometry too, and measured from sf->p the ray ran
-     * past the target (by the offset over the sine of its angle) into the
-     * light's own triangles. */
     vec3 side = v3_dot(ls->wi, sf->nf) > 0.0f ? sf->nf : v3_scale(sf->nf, -1.0f);
     vec3 origin = lanes_offset_origin(sf, side, job->accuracy, job->eps);
     vec3 path = v3_sub(ls->target, origin);
     float length = sqrtf(v3_dot(path, path));
+    if (!(length > 0.0f)) return false;
+    vec3 dir = v3_scale(path, 1.0f / length);
+    *r = (lanes_ray){{origin.x, origin.y, origin.z}, {dir.x, dir.y, dir.z}, {0, 0, 0}, 0.0f, length * (1.0f - 1e-4f)};
+    lanes_ray_prepare_rcp(r, job->rcp);
+    return true;
+}
+
+/* What an unblocked light sample brings through the BSDF value f. */
+static vec3 light_value(const light_sample *ls, vec3 f) { return v3_scale(v3_mul(f, ls->radiance), ls->scale); }
+
+static bool is_black(vec3 f) { return f.x == 0.0f && f.y == 0.0f && f.z == 0.0f; }
+
+/* The light the sample brings through the BSDF value f, its shadow ray
+ * traced at once. */
+static vec3 light_finish(const paths_job *job, const lanes_surface *sf, const light_sample *ls, vec3 f,
+                         paths_counts *c)
+{
+    if (is_black(f)) return v3(0, 0, 0);
     c->shadow++;
-    if (!(length > 0.0f) || occluded(job, origin, v3_scale(path, 1.0f / length), length * (1.0f - 1e-4f)))
-        return v3(0, 0, 0);
-    return v3_scale(v3_mul(f, ls->radiance), ls->scale);
+    lanes_ray r;
+    if (!shadow_ray(job, sf, ls, &r) || occluded(job, &r)) return v3(0, 0, 0);
+    return light_value(ls, f);
 }
 
 /* Light arriving at the surface from one light chosen by power, through
@@ -286,6 +283,44 @@ static vec3 next_event(const paths_job *job, const lanes_surface *sf, const fram
     return light_finish(job, sf, &ls, bsdf_f(job, b, wo_local, ls.wi_local, c), c);
 }
 
+/* Where a path's ray arrives, for every method alike: a miss adds the
+ * background, a hit its emission where it counts; false when the path
+ * ends there (a miss or an emitter), else the surface, its material and
+ * the shading frame with wo in it. The frame's normal is the triangle's
+ * own (by its winding): glass tells inside from outside by it, the opaque
+ * BSDFs are two-sided. */
+static bool path_vertex(const paths_job *job, const lanes_hit *h, vec3 d, vec3 beta, bool after_delta, vec3 *sum,
+                        lanes_surface *sf, uint32_t *material, frame *fr, vec3 *wo)
+{
+    if (h->prim == LANES_NO_HIT) {
+        *sum = v3_add(*sum, v3_mul(beta, background(job, d)));
+        return false;
+    }
+    const lanes_scene *s = job->scene;
+    *sf = lanes_surface_at(s, h, d);
+    *material = s->material_of[h->prim];
+    const lanes_material *m = &s->materials[*material];
+    if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
+        bool counts = job->area_light_quad[*material] ? after_delta && sf->front : true;
+        if (counts) *sum = v3_add(*sum, v3_mul(beta, v3_load(m->emission)));
+    }
+    if (m->kind == LANES_MAT_EMISSIVE) return false;
+    *fr = frame_around(sf->front ? sf->nf : v3_scale(sf->nf, -1.0f));
+    *wo = to_local(fr, v3_scale(v3_normalize(d), -1.0f));
+    return true;
+}
+
+/* The camera ray's direction for a pixel's sample: sample 0 through the
+ * pixel's centre, the others jittered. */
+static vec3 camera_dir(const paths_job *job, uint32_t pixel, uint32_t sample)
+{
+    uint32_t x = pixel % (uint32_t)job->width, y = pixel / (uint32_t)job->width;
+    float sx = 0.5f, sy = 0.5f;
+    if (sample > 0)
+        sx = lanes_random01(pixel, sample, 0, DIM_PIXEL_X), sy = lanes_random01(pixel, sample, 0, DIM_PIXEL_Y);
+    return lanes_view_dir(&job->view, (float)x + sx, (float)y + sy);
+}
+
 /* Where an extension ray with the BSDF's weight w3 leaves along wi (shading
  * frame): the new throughput, or false when the roulette ends the path. */
 static bool continue_path(const paths_job *job, const lanes_surface *sf, const frame *fr, const float wi3[3],
@@ -294,7 +329,7 @@ static bool continue_path(const paths_job *job, const lanes_surface *sf, const f
     *beta = v3_mul(*beta, v3(w3[0], w3[1], w3[2]));
     if (depth + 1 >= 3) {
         float survive = fminf(1.0f, fmaxf(beta->x, fmaxf(beta->y, beta->z)));
-        if (!(random01(pixel, sample, (uint32_t)depth, DIM_ROULETTE) < survive)) return false;
+        if (!(lanes_random01(pixel, sample, (uint32_t)depth, DIM_ROULETTE) < survive)) return false;
         *beta = v3_scale(*beta, 1.0f / survive);
     }
     vec3 wi = to_world(fr, v3(wi3[0], wi3[1], wi3[2]));
@@ -307,39 +342,26 @@ static bool continue_path(const paths_job *job, const lanes_surface *sf, const f
 static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel, uint32_t sample,
                        paths_counts *c)
 {
-    const lanes_scene *s = job->scene;
     vec3 sum = v3(0, 0, 0), beta = v3(1, 1, 1), o = eye, d = dir;
     bool after_delta = true; /* the camera ray counts as one */
     c->paths++;
     for (int depth = 0; depth < job->opt->depth; depth++) {
         c->by_depth[depth]++;
         lanes_hit h = trace(job, o, d, INFINITY);
-        if (h.prim == LANES_NO_HIT) {
-            sum = v3_add(sum, v3_mul(beta, background(job, d)));
-            break;
-        }
-        lanes_surface sf = lanes_surface_at(s, &h, d);
-        uint32_t mi = s->material_of[h.prim];
-        const lanes_material *m = &s->materials[mi];
-        vec3 le = v3_load(m->emission);
-        if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
-            bool counts = job->area_light_quad[mi] ? after_delta && sf.front : true;
-            if (counts) sum = v3_add(sum, v3_mul(beta, le));
-        }
-        if (m->kind == LANES_MAT_EMISSIVE) break;
+        lanes_surface sf;
+        uint32_t mi;
+        frame fr;
+        vec3 wo;
+        if (!path_vertex(job, &h, d, beta, after_delta, &sum, &sf, &mi, &fr, &wo)) break;
         const lanes_bsdf *b = &job->bsdf[mi];
-        /* the frame's normal is the triangle's own (by its winding): glass
-         * tells inside from outside by it, the opaque BSDFs are two-sided */
-        frame fr = frame_around(sf.front ? sf.nf : v3_scale(sf.nf, -1.0f));
-        vec3 dn = v3_normalize(d), wo = to_local(&fr, v3_scale(dn, -1.0f));
         bool delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
         if (!delta) sum = v3_add(sum, v3_mul(beta, next_event(job, &sf, &fr, b, wo, pixel, sample, (uint32_t)depth, c)));
 
         float wo3[3] = {wo.x, wo.y, wo.z}, u3[3], wi3[3], w3[3], pdf;
         uint8_t flags;
-        u3[0] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_1);
-        u3[1] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_2);
-        u3[2] = random01(pixel, sample, (uint32_t)depth, DIM_BSDF_3);
+        u3[0] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_1);
+        u3[1] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_2);
+        u3[2] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_3);
         job->shade_k->bsdf_sample(b, 1, wo3, u3, wi3, w3, &pdf, &flags);
         c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
         if (!(flags & LANES_BSDF_VALID)) break;
@@ -385,7 +407,6 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                                paths_counts *c)
 {
     const int w = job->shade_k->lanes;
-    const lanes_scene *s = job->scene;
     packet_lane L[LANES_MAX_W];
     packet_soa q;
     for (int i = 0; i < n; i++) {
@@ -393,11 +414,8 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
         L[i].pixel = pixel[i], L[i].sample = sample[i];
         L[i].alive = L[i].after_delta = true;
         L[i].beta = v3(1, 1, 1);
-        uint32_t px = pixel[i] % (uint32_t)job->width, py = pixel[i] / (uint32_t)job->width;
-        float sx = 0.5f, sy = 0.5f;
-        if (sample[i] > 0) sx = random01(pixel[i], sample[i], 0, DIM_PIXEL_X), sy = random01(pixel[i], sample[i], 0, DIM_PIXEL_Y);
         L[i].o = job->view.eye;
-        L[i].d = lanes_view_dir(&job->view, (float)px + sx, (float)py + sy);
+        L[i].d = camera_dir(job, pixel[i], sample[i]);
         c->paths++;
     }
     for (int depth = 0; depth < job->opt->depth; depth++) {
@@ -407,25 +425,8 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
             if (!l->alive) continue;
             c->by_depth[depth]++;
             lanes_hit h = trace(job, l->o, l->d, INFINITY);
-            if (h.prim == LANES_NO_HIT) {
-                l->sum = v3_add(l->sum, v3_mul(l->beta, background(job, l->d)));
-                l->alive = false;
-                continue;
-            }
-            l->sf = lanes_surface_at(s, &h, l->d);
-            l->material = s->material_of[h.prim];
-            const lanes_material *m = &s->materials[l->material];
-            if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
-                bool counts = job->area_light_quad[l->material] ? l->after_delta && l->sf.front : true;
-                if (counts) l->sum = v3_add(l->sum, v3_mul(l->beta, v3_load(m->emission)));
-            }
-            if (m->kind == LANES_MAT_EMISSIVE) {
-                l->alive = false;
-                continue;
-            }
-            l->fr = frame_around(l->sf.front ? l->sf.nf : v3_scale(l->sf.nf, -1.0f));
-            l->wo = to_local(&l->fr, v3_scale(v3_normalize(l->d), -1.0f));
-            any = true;
+            l->alive = path_vertex(job, &h, l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
+            any = any || l->alive;
         }
         if (!any) break;
         /* each material present, in the order its first lane comes */
@@ -462,7 +463,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 bool in = i < n && (mask >> i & 1u);
                 soa_put(q.wo, w, i, in ? L[i].wo : up);
                 for (int k = 0; k < 3; k++)
-                    q.u[k * w + i] = in ? random01(L[i].pixel, L[i].sample, (uint32_t)depth, DIM_BSDF_1 + (uint32_t)k) : 0.5f;
+                    q.u[k * w + i] = in ? lanes_random01(L[i].pixel, L[i].sample, (uint32_t)depth, DIM_BSDF_1 + (uint32_t)k) : 0.5f;
             }
             job->shade_k->bsdf_sample(b, (size_t)w, q.wo, q.u, q.wi, q.w, q.pdf, q.flags);
             c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(mask);
@@ -484,15 +485,9 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
 
 /* A tile's paths in packets of W: sample by sample, W pixels of the tile
  * in scanline order at a time (coherent camera rays). */
-static void render_tile_packets(const paths_job *job, int x0, int y0, paths_counts *c)
+static void render_tile_packets(const paths_job *job, const uint32_t *tile_pixel, int count, vec3 *acc, paths_counts *c)
 {
     const int w = job->shade_k->lanes;
-    uint32_t tile_pixel[256];
-    vec3 acc[256];
-    int count = 0;
-    for (int y = y0; y < y0 + 16 && y < job->height; y++)
-        for (int x = x0; x < x0 + 16 && x < job->width; x++)
-            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
     for (int s = 0; s < job->opt->spp; s++)
         for (int first = 0; first < count; first += w) {
             int n = count - first < w ? count - first : w;
@@ -502,10 +497,6 @@ static void render_tile_packets(const paths_job *job, int x0, int y0, paths_coun
             trace_packet_paths(job, tile_pixel + first, samples, n, sums, c);
             for (int i = 0; i < n; i++) acc[first + i] = v3_add(acc[first + i], sums[i]);
         }
-    for (int k = 0; k < count; k++) {
-        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
-        out[0] = acc[k].x / (float)job->opt->spp, out[1] = acc[k].y / (float)job->opt->spp, out[2] = acc[k].z / (float)job->opt->spp;
-    }
 }
 
 /* ---- streams: sorted by material ------------------------------------------ */
@@ -604,12 +595,8 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             l->tile_index = (uint32_t)(k % count);
             l->alive = l->after_delta = true;
             l->beta = v3(1, 1, 1);
-            uint32_t px = l->pixel % (uint32_t)job->width, py = l->pixel / (uint32_t)job->width;
-            float sx = 0.5f, sy = 0.5f;
-            if (l->sample > 0)
-                sx = random01(l->pixel, l->sample, 0, DIM_PIXEL_X), sy = random01(l->pixel, l->sample, 0, DIM_PIXEL_Y);
             l->o = job->view.eye;
-            l->d = lanes_view_dir(&job->view, (float)px + sx, (float)py + sy);
+            l->d = camera_dir(job, l->pixel, l->sample);
             live++;
             c->paths++;
         }
@@ -633,27 +620,8 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             int depth = (int)l->ss_depth;
             c->by_depth[depth]++;
             const lanes_hit *h = &st->hits[r];
-            bool ends = false;
-            if (h->prim == LANES_NO_HIT) {
-                l->sum = v3_add(l->sum, v3_mul(l->beta, background(job, l->d)));
-                ends = true;
-            } else {
-                l->sf = lanes_surface_at(s, h, l->d);
-                l->material = s->material_of[h->prim];
-                const lanes_material *m = &s->materials[l->material];
-                if (m->kind == LANES_MAT_EMISSIVE || m->kind == LANES_MAT_DIFFUSE) {
-                    bool counts = job->area_light_quad[l->material] ? l->after_delta && l->sf.front : true;
-                    if (counts) l->sum = v3_add(l->sum, v3_mul(l->beta, v3_load(m->emission)));
-                }
-                ends = m->kind == LANES_MAT_EMISSIVE;
-                if (!ends) {
-                    l->fr = frame_around(l->sf.front ? l->sf.nf : v3_scale(l->sf.nf, -1.0f));
-                    l->wo = to_local(&l->fr, v3_scale(v3_normalize(l->d), -1.0f));
-                    st->shade_slot[ns] = slot;
-                    st->shade_material[ns++] = l->material;
-                }
-            }
-            if (ends) l->alive = false;
+            l->alive = path_vertex(job, h, l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
+            if (l->alive) st->shade_slot[ns] = slot, st->shade_material[ns++] = l->material;
         }
         t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
         lanes_error err;
@@ -695,19 +663,11 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                             uint32_t slot = st->shade_slot[st->sorted[b0 + lit_lane[j]]];
                             packet_lane *l = &st->path[slot];
                             vec3 f = v3(q.f[j], q.f[lit + j], q.f[2 * lit + j]);
-                            if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) continue;
-                            vec3 side = v3_dot(l->ls.wi, l->sf.nf) > 0.0f ? l->sf.nf : v3_scale(l->sf.nf, -1.0f);
-                            vec3 origin = lanes_offset_origin(&l->sf, side, job->accuracy, job->eps);
-                            vec3 path = v3_sub(l->ls.target, origin);
-                            float length = sqrtf(v3_dot(path, path));
+                            if (is_black(f)) continue;
                             c->shadow++;
-                            if (!(length > 0.0f)) continue;
-                            vec3 dir = v3_scale(path, 1.0f / length);
-                            st->shadow[nsh] = (lanes_ray){{origin.x, origin.y, origin.z}, {dir.x, dir.y, dir.z}, {0, 0, 0},
-                                                          0.0f, length * (1.0f - 1e-4f)};
-                            lanes_ray_prepare_rcp(&st->shadow[nsh], job->rcp);
+                            if (!shadow_ray(job, &l->sf, &l->ls, &st->shadow[nsh])) continue;
                             st->shadow_slot[nsh] = slot;
-                            st->shadow_add[nsh++] = v3_mul(l->beta, v3_scale(v3_mul(f, l->ls.radiance), l->ls.scale));
+                            st->shadow_add[nsh++] = v3_mul(l->beta, light_value(&l->ls, f));
                         }
                     }
                 }
@@ -715,7 +675,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                 for (int i = 0; i < n; i++) {
                     packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
                     wo_c[i] = l->wo.x, wo_c[n + i] = l->wo.y, wo_c[2 * n + i] = l->wo.z;
-                    for (int k = 0; k < 3; k++) u_c[k * n + i] = random01(l->pixel, l->sample, l->ss_depth, DIM_BSDF_1 + (uint32_t)k);
+                    for (int k = 0; k < 3; k++) u_c[k * n + i] = lanes_random01(l->pixel, l->sample, l->ss_depth, DIM_BSDF_1 + (uint32_t)k);
                 }
                 job->shade_k->bsdf_sample(b, (size_t)n, wo_c, u_c, q.wi, q.w, q.pdf, q.flags);
                 c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)n;
@@ -762,55 +722,45 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
     }
 }
 
-static void render_tile_stream(const paths_job *job, int x0, int y0, paths_counts *c)
+static void render_tile_stream(const paths_job *job, const uint32_t *tile_pixel, int count, vec3 *acc, paths_counts *c)
 {
     stream_state *st = c->stream;
-    uint32_t tile_pixel[256];
-    vec3 acc[256];
-    int count = 0;
-    for (int y = y0; y < y0 + 16 && y < job->height; y++)
-        for (int x = x0; x < x0 + 16 && x < job->width; x++)
-            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
     for (int s0 = 0; s0 < job->opt->spp; s0 += STREAM_CHUNK_SAMPLES) {
         int s1 = s0 + STREAM_CHUNK_SAMPLES < job->opt->spp ? s0 + STREAM_CHUNK_SAMPLES : job->opt->spp;
         stream_chunk(job, st, tile_pixel, count, s0, s1, c);
         for (int sm = s0; sm < s1; sm++)
             for (int k = 0; k < count; k++) acc[k] = v3_add(acc[k], st->radiance[(sm - s0) * count + k]);
     }
-    for (int k = 0; k < count; k++) {
-        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
-        out[0] = acc[k].x / (float)job->opt->spp, out[1] = acc[k].y / (float)job->opt->spp, out[2] = acc[k].z / (float)job->opt->spp;
-    }
 }
 
 /* ---- tiles and threads --------------------------------------------------- */
 
+/* A 16x16 tile: its pixels' radiance summed over their samples in sample
+ * order by the method, then averaged into the image. */
 static void render_tile(const paths_job *job, int tile, paths_counts *c)
 {
     int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
-    if (job->opt->method == LANES_PATHS_PACKET) {
-        render_tile_packets(job, x0, y0, c);
-        return;
-    }
-    if (job->opt->method == LANES_PATHS_STREAM) {
-        render_tile_stream(job, x0, y0, c);
-        return;
-    }
-    const int spp = job->opt->spp;
+    uint32_t tile_pixel[256];
+    vec3 acc[256];
+    int count = 0;
     for (int y = y0; y < y0 + 16 && y < job->height; y++)
-        for (int x = x0; x < x0 + 16 && x < job->width; x++) {
-            uint32_t pixel = (uint32_t)y * (uint32_t)job->width + (uint32_t)x;
-            vec3 sum = v3(0, 0, 0);
-            for (int s = 0; s < spp; s++) {
-                /* sample 0 through the pixel's centre, the rest jittered */
-                float sx = 0.5f, sy = 0.5f;
-                if (s > 0) sx = random01(pixel, (uint32_t)s, 0, DIM_PIXEL_X), sy = random01(pixel, (uint32_t)s, 0, DIM_PIXEL_Y);
-                vec3 d = lanes_view_dir(&job->view, (float)x + sx, (float)y + sy);
-                sum = v3_add(sum, trace_path(job, job->view.eye, d, pixel, (uint32_t)s, c));
-            }
-            float *out = job->rgb + (size_t)pixel * 3;
-            out[0] = sum.x / (float)spp, out[1] = sum.y / (float)spp, out[2] = sum.z / (float)spp;
-        }
+        for (int x = x0; x < x0 + 16 && x < job->width; x++)
+            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
+    const int spp = job->opt->spp;
+    if (job->opt->method == LANES_PATHS_PACKET) {
+        render_tile_packets(job, tile_pixel, count, acc, c);
+    } else if (job->opt->method == LANES_PATHS_STREAM) {
+        render_tile_stream(job, tile_pixel, count, acc, c);
+    } else {
+        for (int k = 0; k < count; k++)
+            for (int s = 0; s < spp; s++)
+                acc[k] = v3_add(acc[k], trace_path(job, job->view.eye, camera_dir(job, tile_pixel[k], (uint32_t)s),
+                                                   tile_pixel[k], (uint32_t)s, c));
+    }
+    for (int k = 0; k < count; k++) {
+        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
+        out[0] = acc[k].x / (float)spp, out[1] = acc[k].y / (float)spp, out[2] = acc[k].z / (float)spp;
+    }
 }
 
 typedef struct {
