@@ -43,7 +43,7 @@ lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_mater
                                LANES_ASSIGN_MAX_MATERIALS);
     if ((unsigned)mode >= LANES_ASSIGN_COUNT)
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "materials: assignment %d unknown", (int)mode);
-    if (scene->material_count + (size_t)n > 65536)
+    if (scene->material_count + (size_t)n > LANES_SCENE_MAX_MATERIALS)
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "materials: %d generated with the scene's %zu is more than the 65536 the stream sort takes",
                                n, scene->material_count);

@@ -82,6 +82,35 @@ float lanes_scene_epsilon(const lanes_scene *scene)
 /* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
  * geometric so repeated appends stay linear overall; every size is checked
  * against SIZE_MAX before multiplying. */
+static bool color_ok(const float c[3])
+{
+    return finite3(c) && c[0] >= 0.0f && c[1] >= 0.0f && c[2] >= 0.0f;
+}
+
+/* A reflectance: a fraction of the light, so no channel above 1. */
+static bool reflectance_ok(const float c[3]) { return color_ok(c) && c[0] <= 1.0f && c[1] <= 1.0f && c[2] <= 1.0f; }
+
+/* What is wrong with a material's parameters, or NULL. */
+static const char *material_problem(const lanes_material *m)
+{
+    if ((int)m->kind < 0 || (int)m->kind >= LANES_MAT_KIND_COUNT) return "an unknown kind";
+    if (!reflectance_ok(m->color)) return "a color outside [0, 1]";
+    if (!color_ok(m->emission)) return "a negative or non-finite emission";
+    if (m->kind == LANES_MAT_GLASS && !(isfinite(m->ior) && m->ior > 0.0f)) return "an ior that is not above 0";
+    if ((m->kind == LANES_MAT_CONDUCTOR || m->kind == LANES_MAT_PLASTIC) && !(m->roughness >= 0.0f && m->roughness <= 1.0f))
+        return "a roughness outside [0, 1]";
+    if (m->kind == LANES_MAT_CONDUCTOR && !reflectance_ok(m->f0)) return "an f0 outside [0, 1]";
+    if ((int)m->texture < LANES_MAT_TEXTURE_NONE || (int)m->texture > LANES_MAT_TEXTURE_WOOD)
+        return "an unknown texture";
+    if (m->texture != LANES_MAT_TEXTURE_NONE) {
+        if (m->kind != LANES_MAT_DIFFUSE && m->kind != LANES_MAT_PLASTIC) return "a texture on a kind that takes none";
+        if (!(isfinite(m->texture_scale) && m->texture_scale > 0.0f)) return "a texture scale that is not above 0";
+        if (!reflectance_ok(m->texture_colors[0]) || !reflectance_ok(m->texture_colors[1]))
+            return "a texture color outside [0, 1]";
+    }
+    return NULL;
+}
+
 static bool grow(void **array, size_t *cap, size_t need, size_t size)
 {
     if (need <= *cap)
@@ -170,8 +199,11 @@ lanes_status lanes_scene_add_material(lanes_scene *scene, const lanes_material *
     if (lanes_scene_find_material(scene, m->name) >= 0) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "material '%s' is defined twice", m->name);
     }
-    if (scene->material_count >= UINT32_MAX) {
-        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "too many materials");
+    const char *problem = material_problem(m);
+    if (problem) return lanes_error_set(err, LANES_ERR_BAD_INPUT, "material '%s' has %s", m->name, problem);
+    if (scene->material_count >= LANES_SCENE_MAX_MATERIALS) {
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "material '%s': a scene takes at most %u materials", m->name,
+                               LANES_SCENE_MAX_MATERIALS);
     }
     void *p = scene->materials;
     bool ok = grow(&p, &scene->material_capacity, scene->material_count + 1, sizeof *m);
@@ -307,11 +339,6 @@ void lanes_scene_frame_camera(lanes_scene *s)
     k->up[1] = 1.0f;
 }
 
-static bool color_ok(const float c[3])
-{
-    return finite3(c) && c[0] >= 0.0f && c[1] >= 0.0f && c[2] >= 0.0f;
-}
-
 lanes_status lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
 {
     const char *name = scene->name[0] ? scene->name : "scene";
@@ -328,15 +355,8 @@ lanes_status lanes_scene_validate(const lanes_scene *scene, lanes_error *err)
             return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: material %zu: name not terminated", name,
                                    i);
         }
-        bool ok = (int)m->kind >= LANES_MAT_DIFFUSE && (int)m->kind <= LANES_MAT_EMISSIVE &&
-                  color_ok(m->color) && color_ok(m->emission);
-        if (m->kind == LANES_MAT_GLASS)
-            ok = ok && isfinite(m->ior) && m->ior > 0.0f;
-        if (!ok) {
-            return lanes_error_set(err, LANES_ERR_BAD_INPUT,
-                                   "%s: material '%s' has an invalid kind, color, emission or ior", name,
-                                   m->name);
-        }
+        const char *problem = material_problem(m);
+        if (problem) return lanes_error_set(err, LANES_ERR_BAD_INPUT, "%s: material '%s' has %s", name, m->name, problem);
     }
     for (size_t i = 0; i < scene->triangle_count; i++) {
         if (scene->material_of[i] >= scene->material_count) {

@@ -14,20 +14,53 @@
 #include "build/accuracy.h"
 #include "build/error.h"
 
+/* The first four kinds are what every renderer draws. The last two are
+ * the path tracer's (lanes paths); the Whitted renderers (lanes render)
+ * draw them as lanes_material_whitted_kind says. */
 typedef enum lanes_material_kind {
-    LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo */
+    LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo, optional emission */
     LANES_MAT_MIRROR,       /* perfect specular reflection, color = reflectance */
     LANES_MAT_GLASS,        /* refraction with index ior, plus Fresnel reflection */
-    LANES_MAT_EMISSIVE      /* emits `emission`, reflects nothing */
+    LANES_MAT_EMISSIVE,     /* emits `emission`, reflects nothing */
+    LANES_MAT_CONDUCTOR,    /* GGX metal of roughness, Fresnel from f0 (color = f0) */
+    LANES_MAT_PLASTIC       /* color under a GGX dielectric coat of roughness */
 } lanes_material_kind;
+
+#define LANES_MAT_KIND_COUNT 6
+
+/* A solid texture replaces a diffuse or plastic material's color by a
+ * blend of two colors as a function of position (no UVs exist). */
+typedef enum lanes_material_texture {
+    LANES_MAT_TEXTURE_NONE = 0,
+    LANES_MAT_TEXTURE_CHECKER,
+    LANES_MAT_TEXTURE_NOISE,
+    LANES_MAT_TEXTURE_MARBLE,
+    LANES_MAT_TEXTURE_WOOD
+} lanes_material_texture;
 
 typedef struct lanes_material {
     char name[64];
     lanes_material_kind kind;
-    float color[3];
+    float color[3];     /* reflectance in [0, 1]; a texture's mean color with one */
     float ior;          /* glass only */
-    float emission[3];  /* emissive only */
+    float emission[3];  /* emissive, and optional on diffuse */
+    float roughness;    /* conductor, plastic: in [0, 1] */
+    float f0[3];        /* conductor: reflectance at normal incidence, in [0, 1] */
+    lanes_material_texture texture;
+    float texture_scale;        /* > 0, the pattern's size in scene units */
+    float texture_colors[2][3]; /* the blend's ends, in [0, 1] */
 } lanes_material;
+
+/* The most materials a scene may have: the path tracer's stream sort counts
+ * them in 16 bits. */
+#define LANES_SCENE_MAX_MATERIALS 65536u
+
+/* How the Whitted renderers draw a material: a conductor as a mirror
+ * tinted by f0 (color), a plastic as its diffuse base. */
+static inline lanes_material_kind lanes_material_whitted_kind(lanes_material_kind kind)
+{
+    return kind == LANES_MAT_CONDUCTOR ? LANES_MAT_MIRROR : kind == LANES_MAT_PLASTIC ? LANES_MAT_DIFFUSE : kind;
+}
 
 typedef struct lanes_point_light {
     float position[3];

@@ -446,11 +446,104 @@ static bool parse_camera(ctx *c, const cJSON *cam)
     return true;
 }
 
+/* A reflectance: a color that is a fraction of the light, each channel in
+ * [0, 1]. */
+static bool get_reflectance(ctx *c, const cJSON *v, float out[3])
+{
+    if (!get_color(c, v, out)) return false;
+    for (int i = 0; i < 3; i++)
+        if (out[i] > 1.0f) return fail(c, "a reflectance lies in [0, 1], found %g", (double)out[i]);
+    return true;
+}
+
+static bool parse_texture(ctx *c, const cJSON *t, lanes_material *mat)
+{
+    static const char *const keys[] = {"type", "scale", "colors", NULL};
+    static const char *const names[] = {"checker", "noise", "marble", "wood"};
+    if (!cJSON_IsObject(t)) return fail(c, "expected an object, found %s", type_name(t));
+    if (!check_keys(c, t, keys, "a texture")) return false;
+    const cJSON *e;
+    const char *type = NULL;
+    if (!(e = member(t, "type"))) return missing(c, "type", "a texture");
+    push_key(c, "type");
+    bool ok = get_string(c, e, &type);
+    for (int i = 0; ok && i < 4 && mat->texture == LANES_MAT_TEXTURE_NONE; i++)
+        if (strcmp(type, names[i]) == 0) mat->texture = (lanes_material_texture)(LANES_MAT_TEXTURE_CHECKER + i);
+    if (ok && mat->texture == LANES_MAT_TEXTURE_NONE)
+        ok = fail(c, "unknown texture type '%s' (valid: checker, noise, marble, wood)", type);
+    pop(c);
+    if (!ok) return false;
+    double scale = 1.0;
+    if ((e = member(t, "scale"))) {
+        push_key(c, "scale");
+        ok = get_number(c, e, 1e-6, 1e6, &scale);
+        pop(c);
+        if (!ok) return false;
+    }
+    mat->texture_scale = (float)scale;
+    if (!(e = member(t, "colors"))) return missing(c, "colors", "a texture");
+    push_key(c, "colors");
+    if (!cJSON_IsArray(e) || cJSON_GetArraySize(e) != 2)
+        ok = fail(c, "expected an array of two colors");
+    for (int i = 0; ok && i < 2; i++) {
+        push_index(c, i);
+        ok = get_reflectance(c, cJSON_GetArrayItem(e, i), mat->texture_colors[i]);
+        pop(c);
+    }
+    pop(c);
+    for (int k = 0; ok && k < 3; k++) mat->color[k] = 0.5f * (mat->texture_colors[0][k] + mat->texture_colors[1][k]);
+    return ok;
+}
+
+/* The material types a scene file names: their kinds, the keys each takes
+ * and the grey their color has when none is given. */
+typedef struct {
+    const char *type;
+    lanes_material_kind kind;
+    float grey;
+    const char *const *keys;
+} material_type;
+
+static const char *const k_diffuse[] = {"type", "color", "texture", "emission", NULL};
+static const char *const k_mirror[] = {"type", "color", NULL};
+static const char *const k_glass[] = {"type", "color", "ior", NULL};
+static const char *const k_emissive[] = {"type", "emission", NULL};
+static const char *const k_conductor[] = {"type", "f0", "roughness", NULL};
+static const char *const k_plastic[] = {"type", "color", "texture", "roughness", NULL};
+
+static const material_type material_types[] = {
+    {"diffuse", LANES_MAT_DIFFUSE, 0.8f, k_diffuse},       {"mirror", LANES_MAT_MIRROR, 1.0f, k_mirror},
+    {"glass", LANES_MAT_GLASS, 1.0f, k_glass},             {"emissive", LANES_MAT_EMISSIVE, 0.0f, k_emissive},
+    {"conductor", LANES_MAT_CONDUCTOR, 0.9f, k_conductor}, {"plastic", LANES_MAT_PLASTIC, 0.8f, k_plastic},
+};
+
+/* The keys every type may take but `type`, each parsed where present. */
+static bool parse_material_key(ctx *c, const cJSON *e, const char *key, lanes_material *mat)
+{
+    double d;
+    if (strcmp(key, "color") == 0) return get_reflectance(c, e, mat->color);
+    if (strcmp(key, "f0") == 0) {
+        if (!get_reflectance(c, e, mat->f0)) return false;
+        memcpy(mat->color, mat->f0, sizeof mat->color); /* the Whitted renderers' mirror */
+        return true;
+    }
+    if (strcmp(key, "emission") == 0) return get_color(c, e, mat->emission);
+    if (strcmp(key, "texture") == 0) return parse_texture(c, e, mat);
+    if (strcmp(key, "ior") == 0) {
+        if (!get_number(c, e, 0.01, 10.0, &d)) return false;
+        mat->ior = (float)d;
+        return true;
+    }
+    if (strcmp(key, "roughness") == 0) {
+        if (!get_number(c, e, 0.0, 1.0, &d)) return false;
+        mat->roughness = (float)d;
+        return true;
+    }
+    return true; /* type, comment */
+}
+
 static bool parse_material(ctx *c, const cJSON *m)
 {
-    static const char *const k_diffuse[] = {"type", "color", NULL};
-    static const char *const k_glass[] = {"type", "color", "ior", NULL};
-    static const char *const k_emissive[] = {"type", "emission", NULL};
     const char *name = m->string;
     if (!*name || strlen(name) >= sizeof c->s->materials[0].name)
         return fail(c, "a material name must have 1 to %zu characters",
@@ -465,64 +558,36 @@ static bool parse_material(ctx *c, const cJSON *m)
         return missing(c, "type", "a material");
     push_key(c, "type");
     bool ok = get_string(c, t, &type);
-    lanes_material mat;
-    memset(&mat, 0, sizeof mat);
-    snprintf(mat.name, sizeof mat.name, "%s", name);
-    mat.ior = 1.5f;
-    const char *const *keys = k_diffuse;
-    float grey = 1.0f;
-    if (ok) {
-        if (strcmp(type, "diffuse") == 0) {
-            mat.kind = LANES_MAT_DIFFUSE;
-            grey = 0.8f;
-        } else if (strcmp(type, "mirror") == 0) {
-            mat.kind = LANES_MAT_MIRROR;
-        } else if (strcmp(type, "glass") == 0) {
-            mat.kind = LANES_MAT_GLASS;
-            keys = k_glass;
-        } else if (strcmp(type, "emissive") == 0) {
-            mat.kind = LANES_MAT_EMISSIVE;
-            keys = k_emissive;
-            grey = 0.0f;
-        } else {
-            ok = fail(c, "unknown material type '%s' (valid: diffuse, mirror, glass, emissive)",
-                      type);
-        }
-    }
+    const material_type *mt = NULL;
+    for (size_t i = 0; ok && !mt && i < sizeof material_types / sizeof *material_types; i++)
+        if (strcmp(type, material_types[i].type) == 0) mt = &material_types[i];
+    if (ok && !mt)
+        ok = fail(c, "unknown material type '%s' (valid: diffuse, mirror, glass, emissive, conductor, plastic)", type);
     pop(c);
     if (!ok)
         return false;
     char what[96];
     snprintf(what, sizeof what, "a %s material", type);
-    if (!check_keys(c, m, keys, what))
+    if (!check_keys(c, m, mt->keys, what))
         return false;
-    mat.color[0] = mat.color[1] = mat.color[2] = grey;
-    const cJSON *e;
-    if ((e = member(m, "color"))) {
-        push_key(c, "color");
-        ok = get_color(c, e, mat.color);
+    if (member(m, "color") && member(m, "texture"))
+        return fail(c, "a material takes a color or a texture, not both");
+    if (mt->kind == LANES_MAT_EMISSIVE && !member(m, "emission"))
+        return missing(c, "emission", "an emissive material");
+    lanes_material mat;
+    memset(&mat, 0, sizeof mat);
+    snprintf(mat.name, sizeof mat.name, "%s", name);
+    mat.kind = mt->kind;
+    mat.ior = 1.5f;
+    mat.roughness = 0.3f;
+    for (int k = 0; k < 3; k++) mat.color[k] = mat.f0[k] = mt->grey;
+    for (const cJSON *e = m->child; ok && e; e = e->next) {
+        push_key(c, e->string);
+        ok = parse_material_key(c, e, e->string, &mat);
         pop(c);
-        if (!ok)
-            return false;
     }
-    if ((e = member(m, "ior"))) {
-        double ior;
-        push_key(c, "ior");
-        ok = get_number(c, e, 0.01, 10.0, &ior);
-        pop(c);
-        if (!ok)
-            return false;
-        mat.ior = (float)ior;
-    }
-    if (mat.kind == LANES_MAT_EMISSIVE) {
-        if (!(e = member(m, "emission")))
-            return missing(c, "emission", "an emissive material");
-        push_key(c, "emission");
-        ok = get_color(c, e, mat.emission);
-        pop(c);
-        if (!ok)
-            return false;
-    }
+    if (!ok)
+        return false;
     lanes_error sub;
     if (lanes_scene_add_material(c->s, &mat, NULL, &sub) != LANES_OK) return fail_from(c, &sub);
     return true;

@@ -76,3 +76,10 @@ target_link_libraries(test_material_assign PRIVATE lanes_render)
 target_include_directories(test_material_assign PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME render.material_assign COMMAND test_material_assign)
 set_tests_properties(render.material_assign PROPERTIES LABELS render TIMEOUT 60)
+# The path tracer with many materials at every set: methods bit for bit,
+# sets against scalar shading, packet utilisation by width.
+add_executable(test_paths_sets ${CMAKE_CURRENT_LIST_DIR}/test_paths_sets.c)
+target_link_libraries(test_paths_sets PRIVATE lanes_render)
+target_include_directories(test_paths_sets PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+add_test(NAME render.paths_sets COMMAND test_paths_sets ${CMAKE_CURRENT_LIST_DIR}/data)
+set_tests_properties(render.paths_sets PROPERTIES LABELS render TIMEOUT 300)

@@ -25,9 +25,9 @@
 
 #define PI 3.14159265358979323846
 
-typedef void (*eval_fn)(const lanes_bsdf *, size_t, const float *, const float *, float *, float *);
-typedef void (*sample_fn)(const lanes_bsdf *, size_t, const float *, const float *, float *, float *, float *,
-                          uint8_t *);
+typedef void (*eval_fn)(const lanes_bsdf *, size_t, const float *, const float *, const float *, float *, float *);
+typedef void (*sample_fn)(const lanes_bsdf *, size_t, const float *, const float *, const float *, float *, float *,
+                          float *, uint8_t *);
 
 /* The stated accuracy of eval, pdf and the sample weights against the
  * reference: relative, with an absolute floor for values near 0. */
@@ -94,7 +94,7 @@ static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
                 put(bt->wo, i, wo);
                 put(bt->wi, i, wi);
             }
-            eval(&b, N, bt->wo, bt->wi, bt->f, bt->pdf);
+            eval(&b, N, NULL, bt->wo, bt->wi, bt->f, bt->pdf);
             for (size_t i = 0; i < N; i++) {
                 double wo[3], wi[3], f[3], pdf;
                 get(bt->wo, i, wo);
@@ -111,7 +111,7 @@ static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
             }
             /* reciprocity: the same call with the directions swapped */
             memcpy(bt->u, bt->f, sizeof bt->f); /* keep f(wo, wi) */
-            eval(&b, N, bt->wi, bt->wo, bt->f, bt->pdf);
+            eval(&b, N, NULL, bt->wi, bt->wo, bt->f, bt->pdf);
             for (size_t i = 0; i < 3 * N; i++) {
                 double wo[3], wi[3];
                 get(bt->wo, i % N, wo);
@@ -133,7 +133,7 @@ static void sample_batch(sample_fn sample, batch *bt, const lanes_bsdf *b, const
         put(bt->wo, i, wo);
         for (int k = 0; k < 3; k++) bt->u[(size_t)k * N + i] = (float)(harness_next(r) >> 40) * 0x1p-24f;
     }
-    sample(b, N, bt->wo, bt->u, bt->wi, bt->weight, bt->pdf, bt->flags);
+    sample(b, N, NULL, bt->wo, bt->u, bt->wi, bt->weight, bt->pdf, bt->flags);
 }
 
 /* Checks every sample of a batch for wo against the reference. */
@@ -375,7 +375,8 @@ static void test_chi_square(const char *isa, sample_fn sample, batch *bt, harnes
 }
 
 /* Calls on n items that fill no whole vector at the end: each item as in
- * a full call, nothing written past n. */
+ * a full call, nothing written past n; and with an albedo per item (a
+ * texture's), each item as the material with that albedo. */
 static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r)
 {
     enum { M = 37, GUARD = 16 };
@@ -396,14 +397,26 @@ static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r)
         float o[3 * M], v[3 * M], uu[3 * M];
         for (int c = 0; c < 3; c++)
             for (size_t i = 0; i < n; i++) o[c * n + i] = wo[c * M + i], v[c * n + i] = wi[c * M + i], uu[c * n + i] = u[c * M + i];
-        k->bsdf_eval(&b, n, o, v, f, pdf);
+        k->bsdf_eval(&b, n, NULL, o, v, f, pdf);
         for (size_t i = 0; i < n; i++) {
             double dwo[3] = {o[i], o[n + i], o[2 * n + i]}, dwi[3] = {v[i], v[n + i], v[2 * n + i]}, ff[3], pp;
             ref_bsdf_eval(&b, dwo, dwi, ff, &pp);
             CHECK(near(f[i], ff[0]) && near(f[2 * n + i], ff[2]) && near(pdf[i], pp), "%s: bsdf_eval of %zu items, item %zu", isa, n, i);
         }
         CHECK(f[3 * n] == -7.0f && pdf[n] == -7.0f, "%s: bsdf_eval of %zu items wrote past them", isa, n);
-        k->bsdf_sample(&b, n, o, uu, w2, f, pdf, flags);
+        float albedo[3 * M];
+        for (size_t i = 0; i < 3 * n; i++) albedo[i] = (float)harness_uniform(r);
+        k->bsdf_eval(&b, n, albedo, o, v, f, pdf);
+        for (size_t i = 0; i < n; i++) {
+            double dwo[3] = {o[i], o[n + i], o[2 * n + i]}, dwi[3] = {v[i], v[n + i], v[2 * n + i]}, ff[3], pp;
+            lanes_bsdf own = b;
+            for (int c = 0; c < 3; c++) own.albedo[c] = albedo[c * n + i];
+            ref_bsdf_eval(&own, dwo, dwi, ff, &pp);
+            bool ok = near(pdf[i], pp);
+            for (int c = 0; c < 3; c++) ok = ok && near(f[c * n + i], ff[c]);
+            CHECK(ok, "%s: bsdf_eval of %zu items with their own albedo, item %zu", isa, n, i);
+        }
+        k->bsdf_sample(&b, n, NULL, o, uu, w2, f, pdf, flags);
         CHECK(w2[3 * n] == -7.0f && f[3 * n] == -7.0f && pdf[n] == -7.0f && flags[n] == 0xee,
               "%s: bsdf_sample of %zu items wrote past them", isa, n);
     }

@@ -43,7 +43,8 @@ static bool sphere_scene(lanes_scene *s, lanes_material_kind kind, int lights, d
     mat.kind = kind;
     mat.color[0] = mat.color[1] = mat.color[2] = 0.5f;
     mat.ior = 1.5f;
-    mat.emission[0] = mat.emission[1] = mat.emission[2] = 1.0f;
+    /* a diffuse material's emission shows too: only the emitter has one */
+    if (kind == LANES_MAT_EMISSIVE) mat.emission[0] = mat.emission[1] = mat.emission[2] = 1.0f;
     uint32_t id;
     lanes_xform x;
     const double t[3] = {offset, offset, offset}, one[3] = {1, 1, 1};

@@ -935,6 +935,60 @@ static void test_scene_files(void)
         CHECK(s.camera.eye[2] > 1.0f && fabsf(s.camera.target[0]) < 1e-6f, "framed camera");
         lanes_scene_free(&s);
     }
+    /* Every material type and texture, each key where it lands. */
+    if (CHECK(lanes_scene_load(data("scenes/ok/materials.json"), &s, &err) == LANES_OK, "%s", err.message)) {
+        const lanes_material *copper = &s.materials[lanes_scene_find_material(&s, "copper")],
+                             *shiny = &s.materials[lanes_scene_find_material(&s, "shiny")],
+                             *red = &s.materials[lanes_scene_find_material(&s, "red")],
+                             *lamp = &s.materials[lanes_scene_find_material(&s, "lamp")],
+                             *checker = &s.materials[lanes_scene_find_material(&s, "checker")],
+                             *noise = &s.materials[lanes_scene_find_material(&s, "noise")],
+                             *wood = &s.materials[lanes_scene_find_material(&s, "wood")];
+        CHECK(copper->kind == LANES_MAT_CONDUCTOR && copper->roughness == 0.25f && copper->f0[1] == 0.64f &&
+                  copper->color[1] == 0.64f,
+              "conductor: roughness, f0 and the Whitted tint");
+        CHECK(shiny->roughness == 0.3f && shiny->f0[2] == 0.9f, "conductor defaults");
+        CHECK(red->kind == LANES_MAT_PLASTIC && red->roughness == 0.1f && red->color[0] == 0.7f, "plastic");
+        CHECK(lamp->kind == LANES_MAT_DIFFUSE && lamp->emission[2] == 1.5f && lamp->color[0] == 0.5f,
+              "emitting diffuse");
+        CHECK(checker->texture == LANES_MAT_TEXTURE_CHECKER && checker->texture_scale == 0.25f &&
+                  checker->texture_colors[0][2] == 0.1f && checker->texture_colors[1][2] == 0.7f &&
+                  fabsf(checker->color[2] - 0.4f) < 1e-6f,
+              "checker texture, its colors and their mean");
+        CHECK(noise->kind == LANES_MAT_PLASTIC && noise->texture == LANES_MAT_TEXTURE_NOISE && noise->texture_scale == 1.0f,
+              "textured plastic, default scale");
+        CHECK(wood->texture == LANES_MAT_TEXTURE_WOOD, "wood");
+        lanes_scene_free(&s);
+    }
+    /* The library refuses what a file could not give: bad values, and a
+     * material past the stream sort's 65536. */
+    {
+        lanes_scene t;
+        lanes_scene_init(&t);
+        lanes_material m;
+        memset(&m, 0, sizeof m);
+        m.kind = LANES_MAT_CONDUCTOR;
+        m.roughness = 2.0f;
+        snprintf(m.name, sizeof m.name, "rough");
+        CHECK(lanes_scene_add_material(&t, &m, NULL, &err) == LANES_ERR_BAD_INPUT && strstr(err.message, "roughness"),
+              "roughness 2 accepted: %s", err.message);
+        m.roughness = 0.5f, m.f0[1] = 1.5f;
+        CHECK(lanes_scene_add_material(&t, &m, NULL, &err) == LANES_ERR_BAD_INPUT && strstr(err.message, "f0"),
+              "f0 1.5 accepted: %s", err.message);
+        m.f0[1] = 0.5f, m.texture = LANES_MAT_TEXTURE_MARBLE, m.texture_scale = 1.0f;
+        CHECK(lanes_scene_add_material(&t, &m, NULL, &err) == LANES_ERR_BAD_INPUT && strstr(err.message, "texture"),
+              "a textured conductor accepted: %s", err.message);
+        m.texture = LANES_MAT_TEXTURE_NONE;
+        /* 65536 materials by hand (adding them one by one looks each name up) */
+        t.materials = calloc(LANES_SCENE_MAX_MATERIALS, sizeof *t.materials);
+        if (CHECK(t.materials != NULL, "out of memory")) {
+            for (size_t i = 0; i < LANES_SCENE_MAX_MATERIALS; i++) snprintf(t.materials[i].name, 64, "m%zu", i);
+            t.material_count = t.material_capacity = LANES_SCENE_MAX_MATERIALS;
+            CHECK(lanes_scene_add_material(&t, &m, NULL, &err) == LANES_ERR_BAD_INPUT && strstr(err.message, "65536"),
+                  "material 65537 accepted: %s", err.message);
+        }
+        lanes_scene_free(&t);
+    }
     /* From memory, with a base directory for the mesh. */
     static const char text[] = "{\"materials\": {\"m\": {\"type\": \"diffuse\"}},"
                                " \"objects\": [{\"mesh\": \"quad.obj\", \"material\": \"m\"}]}";
@@ -1138,6 +1192,15 @@ static const bad_case bad_scenes[] = {
     {"scenes/bad/blank.json", {"empty file"}},
     {"scenes/bad/zero_scale.json", {"line 3", "scale"}},
     {"scenes/bad/reserved_name.json", {"line 2", "reserved"}},
+    {"scenes/bad/roughness_above_one.json", {"line 3", "materials.m.roughness", "out of range [0, 1]"}},
+    {"scenes/bad/albedo_above_one.json", {"line 3", "materials.m.color", "reflectance lies in [0, 1], found 1.2"}},
+    {"scenes/bad/ior_zero.json", {"line 3", "materials.m.ior", "out of range"}},
+    {"scenes/bad/unknown_texture.json", {"line 3", "texture.type", "'bricks' (valid: checker, noise, marble, wood)"}},
+    {"scenes/bad/color_and_texture.json", {"line 3", "materials.m", "not both"}},
+    {"scenes/bad/f0_on_plastic.json", {"line 3", "unknown key 'f0' in a plastic material"}},
+    {"scenes/bad/texture_one_color.json", {"line 3", "texture.colors", "two colors"}},
+    {"scenes/bad/texture_bright.json", {"line 3", "texture.colors[1]", "reflectance"}},
+    {"scenes/bad/negative_emission.json", {"line 3", "materials.m.emission", ">= 0"}},
     {"scenes/bad/no_such_scene.json", {"no such file"}},
     {"!deep.json", {"syntax error"}},
 };

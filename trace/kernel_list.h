@@ -148,7 +148,8 @@
 
 /* shade_kernels.c: the shaders' building blocks on n items in SoA form
  * (component k of item i at p[k * n + i]), any n; parameters uniform over
- * the call (one material). See trace/bsdf.h and trace/texture.h.
+ * the call (one material) but the albedo: NULL takes the material's, else
+ * each item's (3, SoA; a texture's). See trace/bsdf.h and trace/texture.h.
  * bsdf_eval: f (3 channels) and the sampling pdf for directions wo, wi.
  * bsdf_sample: a direction wi for each wo from u (3 numbers in [0, 1) per
  *   item), its weight f cos / pdf (3), pdf, and flags (LANES_BSDF_VALID,
@@ -157,10 +158,12 @@
  * noise: gradient noise in [-1, 1] at points p. */
 #define LANES_KERNELS_SHADE(X)                                                             \
     X(PLAIN, void, bsdf_eval,                                                              \
-      (const lanes_bsdf *b, size_t n, const float *wo, const float *wi, float *f, float *pdf), ()) \
+      (const lanes_bsdf *b, size_t n, const float *albedo, const float *wo, const float *wi, \
+       float *f, float *pdf),                                                              \
+      ())                                                                                  \
     X(PLAIN, void, bsdf_sample,                                                            \
-      (const lanes_bsdf *b, size_t n, const float *wo, const float *u, float *wi,          \
-       float *weight, float *pdf, uint8_t *flags),                                         \
+      (const lanes_bsdf *b, size_t n, const float *albedo, const float *wo, const float *u, \
+       float *wi, float *weight, float *pdf, uint8_t *flags),                              \
       ())                                                                                  \
     X(PLAIN, void, texture_color,                                                          \
       (const lanes_texture *t, size_t n, const float *p, float *weight, float *color), ())  \

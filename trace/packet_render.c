@@ -228,7 +228,7 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
         return;
     }
     lanes_surface sf = job->plan.hit_geometry ? lanes_surface_at(s, h, r->d) : lanes_surface_material(s, h);
-    switch (sf.m->kind) {
+    switch (lanes_material_whitted_kind(sf.m->kind)) {
     case LANES_MAT_EMISSIVE:
         add_pixel(job, r->pixel, v3_mul(r->weight, v3_load(sf.m->emission)));
         break;
@@ -236,7 +236,7 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
         vec3 ambient;
         int n = lanes_diffuse_light(s, &sf, r->weight, r->seed, job->opt->base.accuracy, job->eps, job->opt->base.area_samples,
                                     w->shadow_tmp, &ambient);
-        add_pixel(job, r->pixel, ambient);
+        add_pixel(job, r->pixel, v3_add(ambient, v3_mul(r->weight, v3_load(sf.m->emission))));
         for (int i = 0; i < n; i++) {
             const lanes_shadow_ray *sr = &w->shadow_tmp[i];
             /* Shadow rays toward a point light start at the light, so a
@@ -270,6 +270,9 @@ static void shade_hit(worker_t *w, const pending_ray *r, const lanes_hit *h, int
         w->m.specular_made[depth + 1] += (uint64_t)n;
         break;
     }
+    case LANES_MAT_CONDUCTOR:
+    case LANES_MAT_PLASTIC:
+        break; /* not a Whitted kind: lanes_material_whitted_kind maps them */
     }
 }
 

@@ -63,18 +63,20 @@ typedef struct {
     const lanes_kernels *trace_k, *shade_k;
     lanes_view view;
     lanes_bsdf *bsdf;       /* per material */
+    lanes_texture *texture; /* per material: its albedo, where textured */
+    bool *textured;
     bool *area_light_quad;  /* per material: shows a parallelogram light */
     light_ref *lights;
     float *light_cdf;       /* light_count + 1 entries, light_cdf[light_count] = 1 */
     size_t light_count;
-    float *rgb;
+    float *rgb, *rgb2;
     int width, height, tiles_x, tiles_y;
 } paths_job;
 
 typedef struct stream_state stream_state;
 
 typedef struct {
-    uint64_t paths, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
+    uint64_t paths, finished, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
     uint64_t shade_calls, shade_slots, shade_live;
     double stage_seconds[LANES_PATHS_STAGE_COUNT];
     stream_state *stream; /* the worker's streams (stream method) */
@@ -86,12 +88,42 @@ static lanes_bsdf bsdf_of(const lanes_material *m)
 {
     lanes_bsdf b;
     memset(&b, 0, sizeof b);
-    b.kind = m->kind == LANES_MAT_MIRROR ? LANES_BSDF_MIRROR
-             : m->kind == LANES_MAT_GLASS ? LANES_BSDF_GLASS
-                                          : LANES_BSDF_LAMBERT;
+    switch (m->kind) {
+    case LANES_MAT_MIRROR: b.kind = LANES_BSDF_MIRROR; break;
+    case LANES_MAT_GLASS: b.kind = LANES_BSDF_GLASS; break;
+    case LANES_MAT_CONDUCTOR: b.kind = LANES_BSDF_CONDUCTOR; break;
+    case LANES_MAT_PLASTIC: b.kind = LANES_BSDF_PLASTIC; break;
+    default: b.kind = LANES_BSDF_LAMBERT; break; /* an emitter is never shaded */
+    }
     memcpy(b.albedo, m->color, sizeof b.albedo);
+    memcpy(b.f0, m->f0, sizeof b.f0);
+    b.roughness = m->roughness;
     b.ior = m->ior;
     return b;
+}
+
+static lanes_texture texture_of(const lanes_material *m)
+{
+    static const lanes_texture_kind kinds[] = {LANES_TEXTURE_CHECKER, LANES_TEXTURE_CHECKER, LANES_TEXTURE_NOISE,
+                                               LANES_TEXTURE_MARBLE, LANES_TEXTURE_WOOD};
+    lanes_texture t;
+    memset(&t, 0, sizeof t);
+    t.kind = kinds[m->texture];
+    t.scale = m->texture_scale;
+    memcpy(t.color_a, m->texture_colors[0], sizeof t.color_a);
+    memcpy(t.color_b, m->texture_colors[1], sizeof t.color_b);
+    return t;
+}
+
+/* The albedo at n surface points p (SoA) of material mat, into albedo
+ * (SoA): the bsdf kernels' albedo argument, NULL for an untextured
+ * material (its own color). */
+static const float *albedo_at(const paths_job *job, uint32_t mat, size_t n, const float *p, float *albedo)
+{
+    if (!job->textured[mat]) return NULL;
+    float weight[LANES_MAX_W];
+    job->shade_k->texture_color(&job->texture[mat], n, p, weight, albedo);
+    return albedo;
 }
 
 /* Lights with their selection probabilities, by power: a point light's
@@ -171,10 +203,10 @@ static vec3 to_world(const frame *f, vec3 v)
 }
 
 /* f(wo, wi) through the shading kernels (one item). */
-static vec3 bsdf_f(const paths_job *job, const lanes_bsdf *b, vec3 wo, vec3 wi, paths_counts *c)
+static vec3 bsdf_f(const paths_job *job, const lanes_bsdf *b, const float *albedo, vec3 wo, vec3 wi, paths_counts *c)
 {
     float o[3] = {wo.x, wo.y, wo.z}, i[3] = {wi.x, wi.y, wi.z}, f[3], pdf;
-    job->shade_k->bsdf_eval(b, 1, o, i, f, &pdf);
+    job->shade_k->bsdf_eval(b, 1, albedo, o, i, f, &pdf);
     c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
     return v3(f[0], f[1], f[2]);
 }
@@ -276,11 +308,12 @@ static vec3 light_finish(const paths_job *job, const lanes_surface *sf, const li
  * the BSDF towards wo, over the probability of the choice; 0 when the
  * shadow ray is blocked. */
 static vec3 next_event(const paths_job *job, const lanes_surface *sf, const frame *fr, const lanes_bsdf *b,
-                       vec3 wo_local, uint32_t pixel, uint32_t sample, uint32_t depth, paths_counts *c)
+                       const float *albedo, vec3 wo_local, uint32_t pixel, uint32_t sample, uint32_t depth,
+                       paths_counts *c)
 {
     light_sample ls = light_pick(job, sf, fr, pixel, sample, depth);
     if (!ls.active) return v3(0, 0, 0);
-    return light_finish(job, sf, &ls, bsdf_f(job, b, wo_local, ls.wi_local, c), c);
+    return light_finish(job, sf, &ls, bsdf_f(job, b, albedo, wo_local, ls.wi_local, c), c);
 }
 
 /* Where a path's ray arrives, for every method alike: a miss adds the
@@ -354,21 +387,38 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
         vec3 wo;
         if (!path_vertex(job, &h, d, beta, after_delta, &sum, &sf, &mi, &fr, &wo)) break;
         const lanes_bsdf *b = &job->bsdf[mi];
+        float p3[3] = {sf.p.x, sf.p.y, sf.p.z}, albedo3[3];
+        const float *albedo = albedo_at(job, mi, 1, p3, albedo3);
         bool delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
-        if (!delta) sum = v3_add(sum, v3_mul(beta, next_event(job, &sf, &fr, b, wo, pixel, sample, (uint32_t)depth, c)));
+        if (!delta)
+            sum = v3_add(sum, v3_mul(beta, next_event(job, &sf, &fr, b, albedo, wo, pixel, sample, (uint32_t)depth, c)));
 
         float wo3[3] = {wo.x, wo.y, wo.z}, u3[3], wi3[3], w3[3], pdf;
         uint8_t flags;
         u3[0] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_1);
         u3[1] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_2);
         u3[2] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_3);
-        job->shade_k->bsdf_sample(b, 1, wo3, u3, wi3, w3, &pdf, &flags);
+        job->shade_k->bsdf_sample(b, 1, albedo, wo3, u3, wi3, w3, &pdf, &flags);
         c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
         if (!(flags & LANES_BSDF_VALID)) break;
         after_delta = (flags & LANES_BSDF_DELTA) != 0;
         if (!continue_path(job, &sf, &fr, wi3, w3, depth, pixel, sample, &beta, &o, &d)) break;
     }
     return sum;
+}
+
+/* ---- a tile's sums -------------------------------------------------------- */
+
+/* A tile's pixels' samples summed, and their squares (for the per-sample
+ * variance), in sample order. */
+typedef struct {
+    vec3 sum[256], sq[256];
+} tile_sums;
+
+static void add_sample(tile_sums *t, int k, vec3 v)
+{
+    t->sum[k] = v3_add(t->sum[k], v);
+    t->sq[k] = v3_add(t->sq[k], v3_mul(v, v));
 }
 
 /* ---- packets: W paths at once ------------------------------------------- */
@@ -392,6 +442,7 @@ typedef struct {
  * lanes outside the call hold a harmless direction. */
 typedef struct {
     float wo[3 * LANES_MAX_W], wi[3 * LANES_MAX_W], u[3 * LANES_MAX_W], f[3 * LANES_MAX_W], w[3 * LANES_MAX_W];
+    float p[3 * LANES_MAX_W], albedo[3 * LANES_MAX_W];
     float pdf[LANES_MAX_W];
     uint8_t flags[LANES_MAX_W];
 } packet_soa;
@@ -439,6 +490,8 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
             pending &= ~mask;
             const lanes_bsdf *b = &job->bsdf[mat];
             const vec3 up = v3(0, 0, 1);
+            for (int i = 0; job->textured[mat] && i < w; i++) soa_put(q.p, w, i, i < n && (mask >> i & 1u) ? L[i].sf.p : up);
+            const float *albedo = albedo_at(job, mat, (size_t)w, q.p, q.albedo);
             if (b->kind != LANES_BSDF_MIRROR && b->kind != LANES_BSDF_GLASS) {
                 uint32_t lit = 0;
                 for (int i = 0; i < w; i++) {
@@ -450,7 +503,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                     soa_put(q.wi, w, i, active ? L[i].ls.wi_local : up);
                 }
                 if (lit) {
-                    job->shade_k->bsdf_eval(b, (size_t)w, q.wo, q.wi, q.f, q.pdf);
+                    job->shade_k->bsdf_eval(b, (size_t)w, albedo, q.wo, q.wi, q.f, q.pdf);
                     c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(lit);
                     for (int i = 0; i < n; i++)
                         if (lit >> i & 1u) {
@@ -465,7 +518,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 for (int k = 0; k < 3; k++)
                     q.u[k * w + i] = in ? lanes_random01(L[i].pixel, L[i].sample, (uint32_t)depth, DIM_BSDF_1 + (uint32_t)k) : 0.5f;
             }
-            job->shade_k->bsdf_sample(b, (size_t)w, q.wo, q.u, q.wi, q.w, q.pdf, q.flags);
+            job->shade_k->bsdf_sample(b, (size_t)w, albedo, q.wo, q.u, q.wi, q.w, q.pdf, q.flags);
             c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(mask);
             for (int i = 0; i < n; i++) {
                 if (!(mask >> i & 1u)) continue;
@@ -485,7 +538,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
 
 /* A tile's paths in packets of W: sample by sample, W pixels of the tile
  * in scanline order at a time (coherent camera rays). */
-static void render_tile_packets(const paths_job *job, const uint32_t *tile_pixel, int count, vec3 *acc, paths_counts *c)
+static void render_tile_packets(const paths_job *job, const uint32_t *tile_pixel, int count, tile_sums *acc, paths_counts *c)
 {
     const int w = job->shade_k->lanes;
     for (int s = 0; s < job->opt->spp; s++)
@@ -495,7 +548,8 @@ static void render_tile_packets(const paths_job *job, const uint32_t *tile_pixel
             vec3 sums[LANES_MAX_W];
             for (int i = 0; i < n; i++) samples[i] = (uint32_t)s;
             trace_packet_paths(job, tile_pixel + first, samples, n, sums, c);
-            for (int i = 0; i < n; i++) acc[first + i] = v3_add(acc[first + i], sums[i]);
+            for (int i = 0; i < n; i++) add_sample(acc, first + i, sums[i]);
+            c->finished += (uint64_t)n;
         }
 }
 
@@ -642,6 +696,12 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             bool delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS;
             for (int b0 = first; b0 < end; b0 += w) {
                 int n = end - b0 < w ? end - b0 : w;
+                float p_c[3 * LANES_MAX_W], albedo_c[3 * LANES_MAX_W];
+                for (int i = 0; job->textured[mat] && i < n; i++) {
+                    vec3 p = st->path[st->shade_slot[st->sorted[b0 + i]]].sf.p;
+                    p_c[i] = p.x, p_c[n + i] = p.y, p_c[2 * n + i] = p.z;
+                }
+                const float *albedo = albedo_at(job, mat, (size_t)n, p_c, albedo_c);
                 if (!delta) {
                     int lit = 0, lit_lane[LANES_MAX_W];
                     for (int i = 0; i < n; i++) {
@@ -654,10 +714,13 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                     }
                     if (lit > 0) {
                         /* the lit lanes packed: a compact call of lit items */
-                        float wo_c[3 * LANES_MAX_W], wi_c[3 * LANES_MAX_W];
+                        float wo_c[3 * LANES_MAX_W], wi_c[3 * LANES_MAX_W], albedo_lit[3 * LANES_MAX_W];
                         for (int k = 0; k < 3; k++)
-                            for (int i = 0; i < lit; i++) wo_c[k * lit + i] = q.wo[k * w + i], wi_c[k * lit + i] = q.wi[k * w + i];
-                        job->shade_k->bsdf_eval(b, (size_t)lit, wo_c, wi_c, q.f, q.pdf);
+                            for (int i = 0; i < lit; i++) {
+                                wo_c[k * lit + i] = q.wo[k * w + i], wi_c[k * lit + i] = q.wi[k * w + i];
+                                if (albedo) albedo_lit[k * lit + i] = albedo[k * n + lit_lane[i]];
+                            }
+                        job->shade_k->bsdf_eval(b, (size_t)lit, albedo ? albedo_lit : NULL, wo_c, wi_c, q.f, q.pdf);
                         c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)lit;
                         for (int j = 0; j < lit; j++) {
                             uint32_t slot = st->shade_slot[st->sorted[b0 + lit_lane[j]]];
@@ -677,7 +740,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                     wo_c[i] = l->wo.x, wo_c[n + i] = l->wo.y, wo_c[2 * n + i] = l->wo.z;
                     for (int k = 0; k < 3; k++) u_c[k * n + i] = lanes_random01(l->pixel, l->sample, l->ss_depth, DIM_BSDF_1 + (uint32_t)k);
                 }
-                job->shade_k->bsdf_sample(b, (size_t)n, wo_c, u_c, q.wi, q.w, q.pdf, q.flags);
+                job->shade_k->bsdf_sample(b, (size_t)n, albedo, wo_c, u_c, q.wi, q.w, q.pdf, q.flags);
                 c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)n;
                 for (int i = 0; i < n; i++) {
                     packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
@@ -717,19 +780,20 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             st->radiance[(l->sample - (uint32_t)s0) * (uint32_t)count + l->tile_index] = l->sum;
             st->free_slots[nfree++] = slot;
             live--;
+            c->finished++;
         }
         stage_clock(&stage[LANES_PATHS_STAGE_ACCUMULATE], t);
     }
 }
 
-static void render_tile_stream(const paths_job *job, const uint32_t *tile_pixel, int count, vec3 *acc, paths_counts *c)
+static void render_tile_stream(const paths_job *job, const uint32_t *tile_pixel, int count, tile_sums *acc, paths_counts *c)
 {
     stream_state *st = c->stream;
     for (int s0 = 0; s0 < job->opt->spp; s0 += STREAM_CHUNK_SAMPLES) {
         int s1 = s0 + STREAM_CHUNK_SAMPLES < job->opt->spp ? s0 + STREAM_CHUNK_SAMPLES : job->opt->spp;
         stream_chunk(job, st, tile_pixel, count, s0, s1, c);
         for (int sm = s0; sm < s1; sm++)
-            for (int k = 0; k < count; k++) acc[k] = v3_add(acc[k], st->radiance[(sm - s0) * count + k]);
+            for (int k = 0; k < count; k++) add_sample(acc, k, st->radiance[(sm - s0) * count + k]);
     }
 }
 
@@ -741,25 +805,29 @@ static void render_tile(const paths_job *job, int tile, paths_counts *c)
 {
     int x0 = (tile % job->tiles_x) * 16, y0 = (tile / job->tiles_x) * 16;
     uint32_t tile_pixel[256];
-    vec3 acc[256];
+    tile_sums acc;
     int count = 0;
     for (int y = y0; y < y0 + 16 && y < job->height; y++)
         for (int x = x0; x < x0 + 16 && x < job->width; x++)
-            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc[count++] = v3(0, 0, 0);
+            tile_pixel[count] = (uint32_t)y * (uint32_t)job->width + (uint32_t)x, acc.sum[count] = acc.sq[count] = v3(0, 0, 0),
+            count++;
     const int spp = job->opt->spp;
     if (job->opt->method == LANES_PATHS_PACKET) {
-        render_tile_packets(job, tile_pixel, count, acc, c);
+        render_tile_packets(job, tile_pixel, count, &acc, c);
     } else if (job->opt->method == LANES_PATHS_STREAM) {
-        render_tile_stream(job, tile_pixel, count, acc, c);
+        render_tile_stream(job, tile_pixel, count, &acc, c);
     } else {
         for (int k = 0; k < count; k++)
-            for (int s = 0; s < spp; s++)
-                acc[k] = v3_add(acc[k], trace_path(job, job->view.eye, camera_dir(job, tile_pixel[k], (uint32_t)s),
-                                                   tile_pixel[k], (uint32_t)s, c));
+            for (int s = 0; s < spp; s++) {
+                add_sample(&acc, k, trace_path(job, job->view.eye, camera_dir(job, tile_pixel[k], (uint32_t)s),
+                                               tile_pixel[k], (uint32_t)s, c));
+                c->finished++;
+            }
     }
     for (int k = 0; k < count; k++) {
-        float *out = job->rgb + (size_t)tile_pixel[k] * 3;
-        out[0] = acc[k].x / (float)spp, out[1] = acc[k].y / (float)spp, out[2] = acc[k].z / (float)spp;
+        float *out = job->rgb + (size_t)tile_pixel[k] * 3, *out2 = job->rgb2 + (size_t)tile_pixel[k] * 3;
+        out[0] = acc.sum[k].x / (float)spp, out[1] = acc.sum[k].y / (float)spp, out[2] = acc.sum[k].z / (float)spp;
+        out2[0] = acc.sq[k].x / (float)spp, out2[1] = acc.sq[k].y / (float)spp, out2[2] = acc.sq[k].z / (float)spp;
     }
 }
 
@@ -776,7 +844,8 @@ static void tile_task(void *ctx, size_t tile, int worker)
 
 static void free_job(paths_job *job)
 {
-    free(job->bsdf), free(job->area_light_quad), free(job->lights), free(job->light_cdf);
+    free(job->bsdf), free(job->texture), free(job->textured), free(job->area_light_quad), free(job->lights),
+        free(job->light_cdf);
 }
 
 lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_accel *accel,
@@ -832,27 +901,32 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
 
     size_t nm = scene->material_count ? scene->material_count : 1;
     job.bsdf = calloc(nm, sizeof *job.bsdf);
+    job.texture = calloc(nm, sizeof *job.texture);
+    job.textured = calloc(nm, sizeof *job.textured);
     job.area_light_quad = calloc(nm, sizeof *job.area_light_quad);
-    if (!job.bsdf || !job.area_light_quad || !prepare_lights(&job)) {
+    if (!job.bsdf || !job.texture || !job.textured || !job.area_light_quad || !prepare_lights(&job)) {
         free_job(&job);
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory");
     }
     for (size_t i = 0; i < scene->material_count; i++) {
         job.bsdf[i] = bsdf_of(&scene->materials[i]);
+        job.textured[i] = scene->materials[i].texture != LANES_MAT_TEXTURE_NONE;
+        if (job.textured[i]) job.texture[i] = texture_of(&scene->materials[i]);
         job.area_light_quad[i] = strncmp(scene->materials[i].name, "@area_light_", 12) == 0;
     }
     job.rgb = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
+    job.rgb2 = calloc((size_t)job.width * (size_t)job.height * 3, sizeof(float));
     int threads = lanes_parallel_threads(opt->threads);
     paths_counts *counts = calloc((size_t)threads, sizeof *counts);
     stream_state *streams = opt->method == LANES_PATHS_STREAM ? calloc((size_t)threads, sizeof *streams) : NULL;
-    bool ok = job.rgb && counts && (opt->method != LANES_PATHS_STREAM || streams);
+    bool ok = job.rgb && job.rgb2 && counts && (opt->method != LANES_PATHS_STREAM || streams);
     for (int i = 0; ok && streams && i < threads; i++) {
         ok = stream_alloc(&streams[i], opt->stream, scene->material_count);
         counts[i].stream = &streams[i];
     }
     if (!ok) {
         for (int i = 0; streams && i < threads; i++) stream_free(&streams[i]);
-        free(streams), free(job.rgb), free(counts), free_job(&job);
+        free(streams), free(job.rgb), free(job.rgb2), free(counts), free_job(&job);
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory for the image or the streams");
     }
     if (streams) out->stream_bytes = stream_bytes(opt->stream, scene->material_count);
@@ -864,6 +938,7 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     out->seconds = lanes_render_clock() - t0;
     for (int i = 0; i < threads; i++) {
         out->paths += counts[i].paths;
+        out->paths_finished += counts[i].finished;
         out->shadow_rays += counts[i].shadow;
         out->shade_calls += counts[i].shade_calls;
         out->shade_slots += counts[i].shade_slots;
@@ -876,6 +951,7 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     free(counts);
     free_job(&job);
     out->rgb = job.rgb;
+    out->rgb2 = job.rgb2;
     out->width = job.width;
     out->height = job.height;
     return LANES_OK;
@@ -883,6 +959,6 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
 
 void lanes_paths_result_free(lanes_paths_result *r)
 {
-    free(r->rgb);
+    free(r->rgb), free(r->rgb2);
     memset(r, 0, sizeof *r);
 }

@@ -15,7 +15,7 @@
  * (simd/vrandom.h's hash), so a path's samples do not depend on the order
  * paths are traced in or on the method.
  *
- * Methods (the paper's baselines; streams are to come), all with the set's
+ * Methods (the paper's baselines and its streams), all with the set's
  * single-ray traversal (trace_wide, occluded_wide):
  *   single        one path at a time, shaded by the scalar set's BSDF
  *                 kernels;
@@ -88,10 +88,12 @@ typedef struct lanes_paths_options {
 void lanes_paths_default_options(lanes_paths_options *o);
 
 typedef struct lanes_paths_result {
-    float *rgb; /* width * height * 3, linear radiance, the mean of the samples */
+    float *rgb;  /* width * height * 3, linear radiance, the mean of the samples */
+    float *rgb2; /* the same pixels' mean of the samples' squares: a sample's variance is rgb2 - rgb^2 */
     int width, height;
     double seconds;
-    uint64_t paths;
+    uint64_t paths;          /* paths begun (camera rays) */
+    uint64_t paths_finished; /* paths whose radiance reached the image: equal to paths, none lost or doubled */
     uint64_t rays_by_depth[LANES_PATHS_MAX_DEPTH + 1]; /* [0]: camera rays, [d]: extension rays of bounce d */
     uint64_t shadow_rays;
     /* Shading: kernel calls, the lane slots they offered and the lanes that

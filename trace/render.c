@@ -132,12 +132,13 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
     lanes_hit h = trace(job, o, d, 0.0f, INFINITY);
     if (h.prim == LANES_NO_HIT) return v3_mul(weight, lanes_background(d));
     lanes_surface sf = job->plan.hit_geometry ? lanes_surface_at(s, &h, d) : lanes_surface_material(s, &h);
-    switch (sf.m->kind) {
+    switch (lanes_material_whitted_kind(sf.m->kind)) {
     case LANES_MAT_EMISSIVE:
         return v3_mul(weight, v3_load(sf.m->emission));
     case LANES_MAT_DIFFUSE: {
         vec3 sum;
         int n = lanes_diffuse_light(s, &sf, weight, seed, job->opt->accuracy, job->eps, job->opt->area_samples, shadow, &sum);
+        sum = v3_add(sum, v3_mul(weight, v3_load(sf.m->emission)));
         for (int i = 0; i < n; i++) {
             count->shadow++;
             if (!occluded(job, shadow[i].o, shadow[i].d, shadow[i].tfar)) sum = v3_add(sum, shadow[i].add);
@@ -157,6 +158,9 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
         }
         return sum;
     }
+    case LANES_MAT_CONDUCTOR:
+    case LANES_MAT_PLASTIC:
+        break; /* not a Whitted kind: lanes_material_whitted_kind maps them */
     }
     return v3(0, 0, 0);
 }

@@ -9,7 +9,7 @@ void lanes_scene_plan_make(const lanes_scene *scene, int requested, lanes_scene_
 {
     memset(plan, 0, sizeof *plan);
     for (size_t i = 0; i < scene->triangle_count; i++) {
-        lanes_material_kind kind = scene->materials[scene->material_of[i]].kind;
+        lanes_material_kind kind = lanes_material_whitted_kind(scene->materials[scene->material_of[i]].kind);
         if ((int)kind >= 0 && kind < 4) plan->triangles_of_kind[kind]++;
     }
     plan->point_lights = scene->point_light_count;

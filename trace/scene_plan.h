@@ -16,7 +16,7 @@
 
 typedef struct lanes_scene_plan {
     /* what the scene holds */
-    size_t triangles_of_kind[4]; /* by lanes_material_kind */
+    size_t triangles_of_kind[4]; /* by lanes_material_whitted_kind */
     size_t point_lights, area_lights;
 
     /* what the render does */

@@ -177,7 +177,7 @@ static inline int lanes_specular_rays(const lanes_surface *sf, vec3 d, vec3 weig
 {
     vec3 color = v3_mul(weight, v3_load(sf->m->color));
     vec3 above = lanes_offset_origin(sf, sf->nf, mode, eps);
-    if (sf->m->kind == LANES_MAT_MIRROR) {
+    if (lanes_material_whitted_kind(sf->m->kind) == LANES_MAT_MIRROR) {
         out[0] = (lanes_bounce_ray){above, lanes_reflect(d, sf->nf), color, seed * 31u + 7u};
         return 1;
     }

@@ -139,8 +139,15 @@ static inline bsdf_v3 cosine_sample_wi(vfloat u1, vfloat u2)
                      vf_sqrt(vf_max(vf_sub(vf_set1(1.0f), u1), vf_zero()))};
 }
 
-/* f and pdf for wo, wi (any sides). */
-static inline lobe_value bsdf_eval(const lanes_bsdf *b, bsdf_v3 wo, bsdf_v3 wi)
+/* The material's albedo on every lane, for a call without a texture. */
+static inline bsdf_v3 bsdf_uniform_albedo(const lanes_bsdf *b)
+{
+    return (bsdf_v3){vf_set1(b->albedo[0]), vf_set1(b->albedo[1]), vf_set1(b->albedo[2])};
+}
+
+/* f and pdf for wo, wi (any sides), with the albedo of each lane (a
+ * texture's, or b's own): Lambert's, plastic's base, the specular tints. */
+static inline lobe_value bsdf_eval(const lanes_bsdf *b, bsdf_v3 albedo, bsdf_v3 wo, bsdf_v3 wi)
 {
     lobe_value v = {{vf_zero(), vf_zero(), vf_zero()}, vf_zero()};
     if (b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS) return v;
@@ -149,8 +156,7 @@ static inline lobe_value bsdf_eval(const lanes_bsdf *b, bsdf_v3 wo, bsdf_v3 wi)
     const vfloat inv_pi = vf_set1(1.0f / BSDF_PI);
     switch (b->kind) {
     case LANES_BSDF_LAMBERT:
-        v.f = (bsdf_v3){vf_set1(b->albedo[0] / BSDF_PI), vf_set1(b->albedo[1] / BSDF_PI),
-                        vf_set1(b->albedo[2] / BSDF_PI)};
+        v.f = (bsdf_v3){vf_mul(albedo.x, inv_pi), vf_mul(albedo.y, inv_pi), vf_mul(albedo.z, inv_pi)};
         v.pdf = vf_mul(wi.z, inv_pi);
         break;
     case LANES_BSDF_CONDUCTOR:
@@ -163,8 +169,7 @@ static inline lobe_value bsdf_eval(const lanes_bsdf *b, bsdf_v3 wo, bsdf_v3 wi)
          * at each direction: symmetric in wo and wi */
         vfloat f0 = vf_set1(LANES_BSDF_COAT_F0), one = vf_set1(1.0f);
         vfloat t = vf_mul(vf_mul(vf_sub(one, schlick(f0, wo.z)), vf_sub(one, schlick(f0, wi.z))), inv_pi);
-        v.f = (bsdf_v3){vf_fmadd(t, vf_set1(b->albedo[0]), s.f.x), vf_fmadd(t, vf_set1(b->albedo[1]), s.f.y),
-                        vf_fmadd(t, vf_set1(b->albedo[2]), s.f.z)};
+        v.f = (bsdf_v3){vf_fmadd(t, albedo.x, s.f.x), vf_fmadd(t, albedo.y, s.f.y), vf_fmadd(t, albedo.z, s.f.z)};
         const float pick = LANES_BSDF_COAT_PICK;
         v.pdf = vf_fmadd(vf_set1(pick), s.pdf, vf_mul(vf_set1((1.0f - pick) / BSDF_PI), wi.z));
         break;
@@ -195,12 +200,14 @@ static inline vfloat dielectric_fresnel(vfloat ci, vfloat eta_i, vfloat eta_t, v
     return vf_select(tir, one, fr);
 }
 
-/* A scattered direction for wo from (u1, u2, u3) in [0, 1)^3. */
-static inline bsdf_sample_result bsdf_sample(const lanes_bsdf *b, bsdf_v3 wo, vfloat u1, vfloat u2, vfloat u3)
+/* A scattered direction for wo from (u1, u2, u3) in [0, 1)^3, with each
+ * lane's albedo as in bsdf_eval. */
+static inline bsdf_sample_result bsdf_sample(const lanes_bsdf *b, bsdf_v3 albedo, bsdf_v3 wo, vfloat u1, vfloat u2,
+                                             vfloat u3)
 {
     bsdf_sample_result r;
     const vfloat zero = vf_zero(), one = vf_set1(1.0f);
-    const bsdf_v3 tint = {vf_set1(b->albedo[0]), vf_set1(b->albedo[1]), vf_set1(b->albedo[2])};
+    const bsdf_v3 tint = albedo;
     r.delta = b->kind == LANES_BSDF_MIRROR || b->kind == LANES_BSDF_GLASS ? vm_true() : vm_false();
     r.pdf = zero;
     if (b->kind == LANES_BSDF_MIRROR) {
@@ -243,7 +250,7 @@ static inline bsdf_sample_result bsdf_sample(const lanes_bsdf *b, bsdf_v3 wo, vf
         bsdf_v3 s = ggx_sample_wi(bsdf_alpha2(b), up, u1, u2), d = cosine_sample_wi(u1, u2);
         wi = (bsdf_v3){vf_select(coat, s.x, d.x), vf_select(coat, s.y, d.y), vf_select(coat, s.z, d.z)};
     }
-    lobe_value v = bsdf_eval(b, up, wi);
+    lobe_value v = bsdf_eval(b, albedo, up, wi);
     r.valid = vm_and(vf_gt(wi.z, zero), vf_gt(v.pdf, zero));
     vfloat k = vf_select(r.valid, vf_div(wi.z, v.pdf), zero);
     r.weight = (bsdf_v3){vf_mul(v.f.x, k), vf_mul(v.f.y, k), vf_mul(v.f.z, k)};

@@ -2,7 +2,8 @@
  * and samples (bsdf_core.h), solid textures and noise (texture_core.h), on
  * n points or directions in SoA form (component k of item i at
  * p[k * n + i]), SIMD across the items; any n, the tail under a mask.
- * Parameters are uniform over a call: one material per shading batch. */
+ * Parameters are uniform over a call, one material per shading batch, but
+ * for the albedo: a textured material passes each item's (SoA), else NULL. */
 #include "trace/kernels/bsdf_core.h"
 #include "trace/kernels/kernel_common.h"
 #include "trace/kernels/kernel_decls.h"
@@ -33,22 +34,27 @@ static inline void store3(float *p, size_t i, size_t n, bsdf_v3 v)
     store_part(p + 2 * n, i, n, v.z);
 }
 
-void LANES_FN(lanes_bsdf_eval)(const lanes_bsdf *b, size_t n, const float *wo, const float *wi, float *f,
-                               float *pdf)
+static inline bsdf_v3 albedo_at(const lanes_bsdf *b, const float *albedo, size_t i, size_t n)
+{
+    return albedo ? load3(albedo, i, n) : bsdf_uniform_albedo(b);
+}
+
+void LANES_FN(lanes_bsdf_eval)(const lanes_bsdf *b, size_t n, const float *albedo, const float *wo, const float *wi,
+                               float *f, float *pdf)
 {
     for (size_t i = 0; i < n; i += LANES_W) {
-        lobe_value v = bsdf_eval(b, load3(wo, i, n), load3(wi, i, n));
+        lobe_value v = bsdf_eval(b, albedo_at(b, albedo, i, n), load3(wo, i, n), load3(wi, i, n));
         store3(f, i, n, v.f);
         store_part(pdf, i, n, v.pdf);
     }
 }
 
-void LANES_FN(lanes_bsdf_sample)(const lanes_bsdf *b, size_t n, const float *wo, const float *u, float *wi,
-                                 float *weight, float *pdf, uint8_t *flags)
+void LANES_FN(lanes_bsdf_sample)(const lanes_bsdf *b, size_t n, const float *albedo, const float *wo, const float *u,
+                                 float *wi, float *weight, float *pdf, uint8_t *flags)
 {
     for (size_t i = 0; i < n; i += LANES_W) {
         bsdf_v3 uu = load3(u, i, n);
-        bsdf_sample_result r = bsdf_sample(b, load3(wo, i, n), uu.x, uu.y, uu.z);
+        bsdf_sample_result r = bsdf_sample(b, albedo_at(b, albedo, i, n), load3(wo, i, n), uu.x, uu.y, uu.z);
         store3(wi, i, n, r.wi);
         store3(weight, i, n, r.weight);
         store_part(pdf, i, n, r.pdf);
