@@ -8,10 +8,11 @@ set -euo pipefail
 
 # Build tools, the second compiler CI checks with, qemu-user for the dispatch
 # tests on emulated CPUs, and the libraries later steps link (Embree as the
-# reference tracer, OpenImageIO for images, Assimp for meshes, cJSON).
+# reference tracer and its tutorial path tracer, embree-tools, as a real
+# client to race; OpenImageIO for images, Assimp for meshes, cJSON).
 packages=(
     build-essential cmake clang-14 clang binutils pkg-config git ca-certificates
-    qemu-user gnuplot-nox
+    qemu-user gnuplot-nox embree-tools
     libembree-dev libopenimageio-dev openimageio-tools libassimp-dev libcjson-dev
     libomp-14-dev libclang-rt-14-dev
     python3
