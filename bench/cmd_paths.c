@@ -115,10 +115,11 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         cli_json_number(stdout, mrays);
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, utilization);
-        if (o.method == LANES_PATHS_STREAM) {
+        if (o.method == LANES_PATHS_STREAM) printf(", \"stream\": %d, \"stream_bytes\": %zu", o.stream, r.stream_bytes);
+        if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET) {
             static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
                                                                        "shade",    "shadow",    "accumulate"};
-            printf(", \"stream\": %d, \"stream_bytes\": %zu, \"shading_seconds\": ", o.stream, r.stream_bytes);
+            printf(", \"shading_seconds\": ");
             cli_json_number(stdout, r.stage_seconds[LANES_PATHS_STAGE_SHADE]);
             printf(", \"stage_seconds\": {");
             for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) {
@@ -137,10 +138,11 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
                (unsigned long long)rays, (unsigned long long)r.rays_by_depth[0], (unsigned long long)r.shadow_rays,
                r.seconds, mrays, utilization);
         if (o.method == LANES_PATHS_STREAM)
-            printf("stream of %d paths per thread (%.0f KB); thread seconds: generate %.3f, intersect %.3f, sort %.3f, "
-                   "shade %.3f, shadow %.3f, accumulate %.3f\n",
-                   o.stream, (double)r.stream_bytes / 1024.0, r.stage_seconds[0], r.stage_seconds[1], r.stage_seconds[2],
-                   r.stage_seconds[3], r.stage_seconds[4], r.stage_seconds[5]);
+            printf("stream of %d paths per thread (%.0f KB)\n", o.stream, (double)r.stream_bytes / 1024.0);
+        if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET)
+            printf("thread seconds: generate %.3f, intersect %.3f, sort %.3f, shade %.3f, shadow %.3f, accumulate %.3f\n",
+                   r.stage_seconds[0], r.stage_seconds[1], r.stage_seconds[2], r.stage_seconds[3], r.stage_seconds[4],
+                   r.stage_seconds[5]);
         if (out_path) printf("wrote %s\n", out_path);
     }
     lanes_paths_result_free(&r);

@@ -1,4 +1,4 @@
-/* `lanes study --paths` (see study_paths.h). Three experiments per scene,
+/* `lanes study --paths` (see study_paths.h). Four experiments per scene,
  * each configuration timed reps times (the median kept), interleaved by
  * round so that the machine's load falls on all alike:
  *   methods:   single, single-1lane, packet and stream at each set, the
@@ -8,7 +8,10 @@
  *              stream's size, 256 .. 16384 paths, with 36 clustered
  *              materials (the paper's smaller scene);
  *   materials: packet and stream (2048) against the number of clustered
- *              materials, 1 .. 256.
+ *              materials, 1 .. 256;
+ *   clustered: single, packet and stream with 36 and 111 clustered
+ *              materials (the paper's two scenes): Mrays/s and shading
+ *              time against packet's, the paper's comparison.
  * Utilisation does not depend on the run (the paths are the same); time
  * does. */
 #include "bench/study_paths.h"
@@ -161,6 +164,7 @@ static const paths_row *find(const paths_rows *rows, const char *scene, const ch
 }
 
 static const int stream_sizes[] = {256, 512, 1024, 2048, 4096, 8192, 16384};
+static const int paper_materials[] = {36, 111};
 static const int material_counts[] = {1, 4, 16, 64, 256};
 enum { NSTREAM = sizeof stream_sizes / sizeof stream_sizes[0], NMAT = sizeof material_counts / sizeof material_counts[0] };
 
@@ -199,6 +203,26 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
             }
             fprintf(f, "\n");
         }
+        fprintf(f, "\n## %s: the paper's comparison, 36 and 111 clustered materials (stream 2048)\n\n", scenes[s]);
+        fprintf(f, "| set | materials | method | Mrays/s | vs packet | vs single | shading utilisation | shading s | "
+                   "packet's shading s / this |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (int j = 0; j < nsets; j++)
+            for (int k = 0; k < 2; k++) {
+                const paths_row *single = find(rows, scenes[s], "clustered", LANES_PATHS_SINGLE, sets[j], paper_materials[k], -1);
+                const paths_row *packet = find(rows, scenes[s], "clustered", LANES_PATHS_PACKET, sets[j], paper_materials[k], -1);
+                for (int m = LANES_PATHS_SINGLE; m <= LANES_PATHS_STREAM; m++) {
+                    const paths_row *r = find(rows, scenes[s], "clustered", (lanes_paths_method)m, sets[j], paper_materials[k], -1);
+                    if (!r || m == LANES_PATHS_SINGLE_1LANE) continue;
+                    double mr = median(r->mrays, o->reps), sh = median(r->shading_seconds, o->reps);
+                    double mp = packet ? median(packet->mrays, o->reps) : 0.0, ms = single ? median(single->mrays, o->reps) : 0.0;
+                    double sp = packet ? median(packet->shading_seconds, o->reps) : 0.0;
+                    fprintf(f, "| %s | %d | %s | %.2f | %.2f | %.2f | %.3f |", lanes_isa_name(sets[j]), paper_materials[k],
+                            lanes_paths_method_name(r->method), mr, mp > 0.0 ? mr / mp : 0.0, ms > 0.0 ? mr / ms : 0.0,
+                            r->utilization);
+                    if (m == LANES_PATHS_SINGLE) fprintf(f, " - | - |\n");
+                    else fprintf(f, " %.3f | %.2f |\n", sh, sh > 0.0 ? sp / sh : 0.0);
+                }
+            }
         fprintf(f, "\n## %s: clustered materials: shading utilisation, packet / stream\n\n| materials |", scenes[s]);
         for (int j = 0; j < nsets; j++) fprintf(f, " %s |", lanes_isa_name(sets[j]));
         fprintf(f, "\n|---|");
@@ -276,10 +300,11 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
     for (int s = 0; s < nspecs; s++) {
         /* the rows of this scene, then their rounds */
         size_t first = rows.count;
-        study_scene own, clustered36, by_materials[NMAT];
+        study_scene own, clustered36, clustered111, by_materials[NMAT];
         scene_open(&own, specs[s], 0);
         snprintf(scenes[s], sizeof scenes[s], "%.63s", own.scene.name);
         scene_open(&clustered36, specs[s], 36);
+        scene_open(&clustered111, specs[s], 111);
         for (int k = 0; k < NMAT; k++) scene_open(&by_materials[k], specs[s], material_counts[k]);
         for (int j = 0; j < nsets; j++) {
             int lanes = lanes_kernels_for(sets[j])->lanes;
@@ -308,6 +333,15 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
                     r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes;
                     r->materials = material_counts[k], r->stream = 2048, r->spp = o->spp;
                 }
+            for (int k = 0; k < 2; k++)
+                for (int m = LANES_PATHS_SINGLE; m <= LANES_PATHS_STREAM; m++) {
+                    if (m == LANES_PATHS_SINGLE_1LANE) continue;
+                    paths_row *r = add(&rows);
+                    snprintf(r->scene, sizeof r->scene, "%.63s", scenes[s]);
+                    snprintf(r->experiment, sizeof r->experiment, "clustered");
+                    r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes;
+                    r->materials = paper_materials[k], r->stream = 2048, r->spp = o->spp;
+                }
         }
         size_t total = rows.count - first;
         for (int round = 0; round < o->reps; round++)
@@ -315,7 +349,8 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
                 paths_row *r = &rows.rows[i];
                 study_scene *sc = strcmp(r->experiment, "methods") == 0 ? &own
                                   : strcmp(r->experiment, "stream") == 0 ? &clustered36
-                                                                         : NULL;
+                                  : strcmp(r->experiment, "clustered") == 0 ? (r->materials == 36 ? &clustered36 : &clustered111)
+                                                                            : NULL;
                 for (int k = 0; !sc && k < NMAT; k++)
                     if (material_counts[k] == r->materials) sc = &by_materials[k];
                 if (!o->json && isatty(2))
@@ -326,6 +361,7 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
         if (!o->json && isatty(2)) fprintf(stderr, "\n");
         scene_close(&own);
         scene_close(&clustered36);
+        scene_close(&clustered111);
         for (int k = 0; k < NMAT; k++) scene_close(&by_materials[k]);
     }
     char path[1200];

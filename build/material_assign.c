@@ -36,6 +36,35 @@ static uint32_t cell_of(const float *v, const float lo[3], const float hi[3])
     return key;
 }
 
+/* Material i of the generator: by i mod 8 diffuse, plastic, textured
+ * diffuse, conductor, diffuse, textured plastic, diffuse, mirror (so one
+ * material is plain diffuse); colors, roughness and textures from a hash
+ * of i; textures of a size 1/16 of the scene's diagonal. */
+static void generated_material(int i, float diagonal, lanes_material *m)
+{
+    static const lanes_material_kind kinds[8] = {LANES_MAT_DIFFUSE, LANES_MAT_PLASTIC, LANES_MAT_DIFFUSE, LANES_MAT_CONDUCTOR,
+                                                 LANES_MAT_DIFFUSE, LANES_MAT_PLASTIC, LANES_MAT_DIFFUSE, LANES_MAT_MIRROR};
+    memset(m, 0, sizeof *m);
+    snprintf(m->name, sizeof m->name, "@mat%04d", i);
+    m->kind = kinds[i % 8];
+    uint32_t h = lanes_hash32((uint32_t)i * 3u + 1u), g = lanes_hash32(h);
+    for (int c = 0; c < 3; c++) {
+        m->color[c] = 0.15f + 0.7f * (float)((h >> (8 * c)) & 255u) / 255.0f;
+        m->f0[c] = m->color[c];
+    }
+    m->ior = 1.5f;
+    m->roughness = 0.1f + 0.5f * (float)(h >> 24) / 255.0f;
+    if (i % 8 == 2 || i % 8 == 5) {
+        m->texture = (lanes_material_texture)(LANES_MAT_TEXTURE_CHECKER + (i / 8) % 4);
+        m->texture_scale = diagonal > 0.0f ? diagonal / 16.0f : 1.0f;
+        for (int c = 0; c < 3; c++) {
+            m->texture_colors[0][c] = m->color[c];
+            m->texture_colors[1][c] = 0.1f + 0.8f * (float)((g >> (8 * c)) & 255u) / 255.0f;
+            m->color[c] = 0.5f * (m->texture_colors[0][c] + m->texture_colors[1][c]);
+        }
+    }
+}
+
 lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_material_assign mode, lanes_error *err)
 {
     if (n < 1 || n > LANES_ASSIGN_MAX_MATERIALS)
@@ -48,19 +77,16 @@ lanes_status lanes_scene_assign_materials(lanes_scene *scene, int n, lanes_mater
                                "materials: %d generated with the scene's %zu is more than the 65536 the stream sort takes",
                                n, scene->material_count);
     uint32_t first = (uint32_t)scene->material_count;
+    float lo[3], hi[3];
+    lanes_scene_bounds(scene, lo, hi);
+    float diagonal = sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
     for (int i = 0; i < n; i++) {
         lanes_material m;
-        memset(&m, 0, sizeof m);
-        snprintf(m.name, sizeof m.name, "@mat%04d", i);
-        m.kind = i % 8 == 7 ? LANES_MAT_MIRROR : LANES_MAT_DIFFUSE;
-        uint32_t h = lanes_hash32((uint32_t)i * 3u + 1u);
-        for (int c = 0; c < 3; c++) m.color[c] = 0.15f + 0.7f * (float)((h >> (8 * c)) & 255u) / 255.0f;
-        m.ior = 1.5f;
+        generated_material(i, diagonal, &m);
         lanes_status st = lanes_scene_add_material(scene, &m, NULL, err);
         if (st != LANES_OK) return st;
     }
-    float lo[3], hi[3];
-    lanes_scene_bounds(scene, lo, hi);
     uint32_t run = 0, previous = 0;
     for (size_t t = 0; t < scene->triangle_count; t++) {
         uint32_t own = scene->material_of[t];

@@ -8,8 +8,11 @@
  *     64^3 grid over the scene's bounds take one (spatially coherent);
  *   - at random: each triangle its own draw.
  * The choice is a hash of the run, cell or triangle: the same scene gives
- * the same assignment. The materials are diffuse with their own colors,
- * every eighth a mirror. Emissive triangles (lights) keep theirs.
+ * the same assignment. The materials are the shader library's kinds in
+ * turn, with their own colors: by index mod 8 diffuse, plastic, diffuse
+ * with a solid texture (checker, noise, marble, wood in turn), conductor,
+ * diffuse, textured plastic, diffuse, mirror. Emissive triangles (lights)
+ * keep theirs.
  *
  * Compiled for the x86-64 baseline. */
 #ifndef LANES_BUILD_MATERIAL_ASSIGN_H

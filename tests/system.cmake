@@ -193,11 +193,11 @@ if(lanes_cli_target)
                        test $s -eq 2; grep -q -- \"$\{bad%% *\}\" <<< \"$msg\"; done"
             $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
   list(APPEND lanes_output_tests cli.paths)
-  # lanes study --paths: its three experiments in the CSV, the tables.
+  # lanes study --paths: its four experiments in the CSV, the tables.
   add_test(NAME cli.study_paths
     COMMAND bash -c "set -e; rm -rf \"$1/study_paths\"; \"$0\" study --paths --reps 1 --size 32x32 --out \"$1/study_paths\" > /dev/null; \
-                     for e in methods stream materials; do grep -q \",$e,\" \"$1/study_paths/paths.csv\"; done; \
-                     grep -q 'stream size' \"$1/study_paths/tables.md\""
+                     for e in methods stream materials clustered; do grep -q \",$e,\" \"$1/study_paths/paths.csv\"; done; \
+                     grep -q 'stream size' \"$1/study_paths/tables.md\"; grep -q 'packet.s shading s / this' \"$1/study_paths/tables.md\""
             $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
   list(APPEND lanes_output_tests cli.study_paths)
   set_tests_properties(cli.output_folders cli.output_unwritable cli.image_unwritable ${lanes_output_tests} PROPERTIES

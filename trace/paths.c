@@ -407,6 +407,14 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
     return sum;
 }
 
+/* Adds the time since `since` to *acc; returns now. */
+static double stage_clock(double *acc, double since)
+{
+    double now = lanes_render_clock();
+    *acc += now - since;
+    return now;
+}
+
 /* ---- a tile's sums -------------------------------------------------------- */
 
 /* A tile's pixels' samples summed, and their squares (for the per-sample
@@ -460,6 +468,11 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
     const int w = job->shade_k->lanes;
     packet_lane L[LANES_MAX_W];
     packet_soa q;
+    lanes_ray shadow[LANES_MAX_W];
+    vec3 shadow_add[LANES_MAX_W];
+    int shadow_lane[LANES_MAX_W];
+    uint8_t blocked[LANES_MAX_W];
+    double *stage = c->stage_seconds, t = lanes_render_clock();
     for (int i = 0; i < n; i++) {
         memset(&L[i], 0, sizeof L[i]);
         L[i].pixel = pixel[i], L[i].sample = sample[i];
@@ -469,17 +482,25 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
         L[i].d = camera_dir(job, pixel[i], sample[i]);
         c->paths++;
     }
+    t = stage_clock(&stage[LANES_PATHS_STAGE_GENERATE], t);
     for (int depth = 0; depth < job->opt->depth; depth++) {
         bool any = false;
+        lanes_hit hits[LANES_MAX_W];
+        for (int i = 0; i < n; i++)
+            if (L[i].alive) hits[i] = trace(job, L[i].o, L[i].d, INFINITY);
+        t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
         for (int i = 0; i < n; i++) {
             packet_lane *l = &L[i];
             if (!l->alive) continue;
             c->by_depth[depth]++;
-            lanes_hit h = trace(job, l->o, l->d, INFINITY);
-            l->alive = path_vertex(job, &h, l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
+            l->alive = path_vertex(job, &hits[i], l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
             any = any || l->alive;
         }
-        if (!any) break;
+        if (!any) {
+            stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
+            break;
+        }
+        int nsh = 0;
         /* each material present, in the order its first lane comes */
         uint32_t pending = 0;
         for (int i = 0; i < n; i++) pending |= (uint32_t)L[i].alive << i;
@@ -505,11 +526,14 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 if (lit) {
                     job->shade_k->bsdf_eval(b, (size_t)w, albedo, q.wo, q.wi, q.f, q.pdf);
                     c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(lit);
-                    for (int i = 0; i < n; i++)
-                        if (lit >> i & 1u) {
-                            vec3 f = v3(q.f[i], q.f[w + i], q.f[2 * w + i]);
-                            L[i].sum = v3_add(L[i].sum, v3_mul(L[i].beta, light_finish(job, &L[i].sf, &L[i].ls, f, c)));
-                        }
+                    for (int i = 0; i < n; i++) {
+                        vec3 f = v3(q.f[i], q.f[w + i], q.f[2 * w + i]);
+                        if (!(lit >> i & 1u) || is_black(f)) continue;
+                        c->shadow++;
+                        if (!shadow_ray(job, &L[i].sf, &L[i].ls, &shadow[nsh])) continue;
+                        shadow_lane[nsh] = i;
+                        shadow_add[nsh++] = v3_mul(L[i].beta, light_value(&L[i].ls, f));
+                    }
                 }
             }
             for (int i = 0; i < w; i++) {
@@ -527,11 +551,25 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                     l->alive = false;
                     continue;
                 }
-                l->after_delta = (q.flags[i] & LANES_BSDF_DELTA) != 0;
-                float wi3[3] = {q.wi[i], q.wi[w + i], q.wi[2 * w + i]}, w3[3] = {q.w[i], q.w[w + i], q.w[2 * w + i]};
-                l->alive = continue_path(job, &l->sf, &l->fr, wi3, w3, depth, l->pixel, l->sample, &l->beta, &l->o, &l->d);
+                l->pending_flags = q.flags[i];
+                for (int k = 0; k < 3; k++) l->pending_wi[k] = q.wi[k * w + i], l->pending_w[k] = q.w[k * w + i];
             }
         }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
+        /* the packet's shadow rays in one call; each path's light before
+         * its next bounce, as single-1lane adds them */
+        job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, shadow, (size_t)nsh, blocked, NULL);
+        for (int k = 0; k < nsh; k++)
+            if (!blocked[k]) L[shadow_lane[k]].sum = v3_add(L[shadow_lane[k]].sum, shadow_add[k]);
+        t = stage_clock(&stage[LANES_PATHS_STAGE_SHADOW], t);
+        for (int i = 0; i < n; i++) {
+            packet_lane *l = &L[i];
+            if (!l->alive) continue;
+            l->after_delta = (l->pending_flags & LANES_BSDF_DELTA) != 0;
+            l->alive = continue_path(job, &l->sf, &l->fr, l->pending_wi, l->pending_w, depth, l->pixel, l->sample, &l->beta,
+                                     &l->o, &l->d);
+        }
+        t = stage_clock(&stage[LANES_PATHS_STAGE_ACCUMULATE], t);
     }
     for (int i = 0; i < n; i++) sum[i] = L[i].sum;
 }
@@ -619,12 +657,6 @@ static bool stream_alloc(stream_state *st, int size, size_t materials)
            st->radiance;
 }
 
-static double stage_clock(double *acc, double since)
-{
-    double now = lanes_render_clock();
-    *acc += now - since;
-    return now;
-}
 
 /* The paths (tile pixel p, sample s) for s in [s0, s1), streamed. */
 static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t *tile_pixel, int count, int s0, int s1,
