@@ -13,11 +13,14 @@
 #include "build/scene_load.h"
 #include "trace/paths.h"
 #include "trace/scene_plan.h"
+#ifdef LANES_HAVE_COMPARE
+#include "bench/embree_adapter.h"
+#endif
 
 static int paths_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
     const char *scene_spec = NULL, *out_path = NULL, *value, *method_name = "single", *accuracy_name = NULL;
-    const char *assign_name = "cluster";
+    const char *assign_name = "cluster", *intersector_name = "lanes";
     int materials = 0;
     lanes_paths_options o;
     lanes_paths_default_options(&o);
@@ -38,6 +41,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         } else if (cli_value(&a, "--materials", &value)) {
             materials = (int)cli_parse_count(&a, "--materials", value, 1, LANES_ASSIGN_MAX_MATERIALS);
         } else if (cli_value(&a, "--assign", &assign_name)) {
+        } else if (cli_value(&a, "--intersector", &intersector_name)) {
         } else if (cli_value(&a, "--threads", &value)) {
             o.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
         } else if (cli_value(&a, "--background", &value)) {
@@ -64,6 +68,12 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     o.accuracy = (lanes_accuracy)accuracy;
     int assign = lanes_material_assign_from_name(assign_name);
     if (assign < 0) cli_usage_error(ctx, self, "unknown assignment '%s' (object, cluster, random)", assign_name);
+    bool with_embree = strcmp(intersector_name, "embree") == 0;
+    if (!with_embree && strcmp(intersector_name, "lanes") != 0)
+        cli_usage_error(ctx, self, "unknown intersector '%s' (lanes, embree)", intersector_name);
+#ifndef LANES_HAVE_COMPARE
+    if (with_embree) cli_fail("paths: --intersector embree: this lanes was built without Embree");
+#endif
     if (out_path) cli_make_parent_dirs("paths: -o", out_path);
     o.isa = lanes_isa_current();
     const lanes_kernels *k = lanes_kernels_for(o.isa);
@@ -81,8 +91,27 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         cli_fail("%s", err.message);
     }
     lanes_paths_result r;
+#ifdef LANES_HAVE_COMPARE
+    lanes_embree *embree = NULL;
+    lanes_paths_intersector x;
+    if (with_embree) {
+        if (lanes_embree_create(&scene, lanes_embree_isa_best(), o.threads, &embree, &err) != LANES_OK) {
+            lanes_render_accel_free(&accel);
+            lanes_scene_free(&scene);
+            cli_fail("%s", err.message);
+        }
+        x = lanes_embree_paths_intersector(embree);
+        o.intersector = &x;
+    }
+#endif
     lanes_status st = lanes_paths_render(&scene, &accel, &o, &r, &err);
     lanes_render_accel_free(&accel);
+#ifdef LANES_HAVE_COMPARE
+    const char *engine = embree ? lanes_embree_isa_name(lanes_embree_get_isa(embree)) : NULL;
+    lanes_embree_destroy(embree);
+#else
+    const char *engine = NULL;
+#endif
     if (st != LANES_OK) {
         lanes_scene_free(&scene);
         cli_fail("%s", err.message);
@@ -115,6 +144,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         cli_json_number(stdout, mrays);
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, utilization);
+        printf(", \"intersector\": \"%s\"", engine ? "embree" : "lanes");
         if (o.method == LANES_PATHS_STREAM) printf(", \"stream\": %d, \"stream_bytes\": %zu", o.stream, r.stream_bytes);
         if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET) {
             static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
@@ -134,6 +164,9 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
                scene.material_count, r.width, r.height, o.spp, o.depth);
         printf("method %s, isa %s (%d lanes), %d threads, on %s\n", lanes_paths_method_name(o.method), k->name,
                k->lanes, threads, lanes_cpu()->brand);
+        if (engine)
+            printf("intersector: Embree %s (rtcIntersect1M, rtcOccluded1M; one ray: rtcIntersect1, rtcOccluded1), shading by %s\n",
+                   engine, k->name);
         printf("rays: %llu (%llu camera, %llu shadow); %.3f s; %.2f Mrays/s; shading utilisation %.3f\n",
                (unsigned long long)rays, (unsigned long long)r.rays_by_depth[0], (unsigned long long)r.shadow_rays,
                r.seconds, mrays, utilization);
@@ -162,6 +195,8 @@ const cli_command cli_cmd_paths = {
              "                        packet (W paths together, each material under its lane mask) or\n"
              "                        stream (per thread a stream of paths sorted by material, shaded\n"
              "                        W at a time; Afra et al. 2016)\n"
+             "  --intersector E       lanes (the set's traversal; default) or embree (Embree at its\n"
+             "                        best set: rtcIntersect1M and rtcOccluded1M, or the 1-ray calls)\n"
              "  --stream N            stream method: paths in flight per thread, 256..65536, a\n"
              "                        multiple of 16 (default 2048)\n"
              "  --materials N         N generated materials (@mat0000 ...) instead of the scene's own\n"

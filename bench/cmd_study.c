@@ -773,7 +773,11 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
         if (nspecs == 0) scene_specs[nspecs++] = full ? "sponza-bunny" : "default";
         paths_study_options po = {out_dir ? out_dir : "out/paths", size_given ? plan.width : (full ? 256 : 128),
                                   size_given ? plan.height : (full ? 256 : 128), full ? 16 : 8,
-                                  reps_given ? plan.reps : (full ? 5 : 3), plan.threads, json};
+                                  reps_given ? plan.reps : (full ? 5 : 3), plan.threads, json, false, NULL};
+#ifdef LANES_HAVE_COMPARE
+        po.embree = true;
+        po.embree_isa = lanes_embree_isa_name(lanes_embree_isa_best());
+#endif
         return lanes_study_paths(scene_specs, nspecs, sets, nsets, &po);
     }
     if (!out_dir) out_dir = "out/study";

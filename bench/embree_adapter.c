@@ -467,6 +467,65 @@ void lanes_embree_trace1(const lanes_embree *e, const lanes_ray *rays, size_t n,
     lanes_fp_restore(csr);
 }
 
+static void paths_trace(void *ctx, const lanes_ray *rays, size_t n, lanes_hit *hits)
+{
+    lanes_embree_trace_stream(ctx, rays, n, hits);
+}
+
+static void paths_occluded(void *ctx, const lanes_ray *rays, size_t n, uint8_t *occluded)
+{
+    lanes_embree_occluded_stream(ctx, rays, n, occluded);
+}
+
+lanes_paths_intersector lanes_embree_paths_intersector(const lanes_embree *e)
+{
+    return (lanes_paths_intersector){"embree", (void *)e, paths_trace, paths_occluded};
+}
+
+/* A stream of n rays in one rtcIntersect1M / rtcOccluded1M call, through a
+ * copy in Embree's layout (on the stack for a few rays). */
+enum { STREAM_STACK_RAYS = 16 };
+
+void lanes_embree_trace_stream(const lanes_embree *e, const lanes_ray *rays, size_t n, lanes_hit *hits)
+{
+    struct RTCRayHit stack[STREAM_STACK_RAYS], *rh = n <= STREAM_STACK_RAYS ? stack : malloc(n * sizeof *rh);
+    if (!rh) {
+        lanes_embree_trace1(e, rays, n, hits); /* no memory for the copy: one at a time */
+        return;
+    }
+    for (size_t i = 0; i < n; i++) {
+        memset(&rh[i], 0, sizeof rh[i]);
+        fill_ray(&rh[i].ray, &rays[i]);
+        rh[i].hit.geomID = rh[i].hit.primID = rh[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    unsigned csr = lanes_fp_fast_enter();
+    if (n == 1) rtcIntersect1(e->scene, &ctx, rh);
+    else if (n > 1) rtcIntersect1M(e->scene, &ctx, rh, (unsigned)n, sizeof *rh);
+    lanes_fp_restore(csr);
+    for (size_t i = 0; i < n; i++) hits[i] = make_hit(rh[i].hit.geomID, rh[i].hit.primID, rh[i].ray.tfar, rh[i].hit.u, rh[i].hit.v);
+    if (rh != stack) free(rh);
+}
+
+void lanes_embree_occluded_stream(const lanes_embree *e, const lanes_ray *rays, size_t n, uint8_t *occluded)
+{
+    struct RTCRay stack[STREAM_STACK_RAYS], *r = n <= STREAM_STACK_RAYS ? stack : malloc(n * sizeof *r);
+    if (!r) {
+        lanes_embree_occluded1(e, rays, n, occluded);
+        return;
+    }
+    for (size_t i = 0; i < n; i++) fill_ray(&r[i], &rays[i]);
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    unsigned csr = lanes_fp_fast_enter();
+    if (n == 1) rtcOccluded1(e->scene, &ctx, r);
+    else if (n > 1) rtcOccluded1M(e->scene, &ctx, r, (unsigned)n, sizeof *r);
+    lanes_fp_restore(csr);
+    for (size_t i = 0; i < n; i++) occluded[i] = r[i].tfar == -INFINITY;
+    if (r != stack) free(r);
+}
+
 void lanes_embree_occluded1(const lanes_embree *e, const lanes_ray *rays, size_t n,
                             uint8_t *occluded)
 {

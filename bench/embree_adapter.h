@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "build/scene.h"
+#include "trace/paths.h"
 #include "trace/kernels.h"
 
 /* Embree's own kernel sets, as its device config names them. */
@@ -107,6 +108,18 @@ void lanes_embree_batch_occluded(const lanes_embree_batch *b, uint8_t *occluded)
 void lanes_embree_trace1(const lanes_embree *e, const lanes_ray *rays, size_t n, lanes_hit *hits);
 void lanes_embree_occluded1(const lanes_embree *e, const lanes_ray *rays, size_t n,
                             uint8_t *occluded);
+
+/* n rays in one rtcIntersect1M / rtcOccluded1M call (a ray stream: Embree
+ * sorts and traverses it as it sees fit; one ray: rtcIntersect1 /
+ * rtcOccluded1), the answers as above. For
+ * lanes paths --intersector embree. Safe from several threads. */
+void lanes_embree_trace_stream(const lanes_embree *e, const lanes_ray *rays, size_t n, lanes_hit *hits);
+void lanes_embree_occluded_stream(const lanes_embree *e, const lanes_ray *rays, size_t n, uint8_t *occluded);
+
+/* The path tracer's intersector that traces with e: rtcIntersect1M and
+ * rtcOccluded1M on each call's rays, rtcIntersect1 and rtcOccluded1 on a
+ * call of one. */
+lanes_paths_intersector lanes_embree_paths_intersector(const lanes_embree *e);
 
 /* Flush-to-zero and denormals-are-zero, as Embree asks of every thread that
  * traces; both engines are timed under the same MXCSR. Returns the previous

@@ -1,4 +1,4 @@
-/* `lanes study --paths` (see study_paths.h). Four experiments per scene,
+/* `lanes study --paths` (see study_paths.h). Five experiments per scene,
  * each configuration timed reps times (the median kept), interleaved by
  * round so that the machine's load falls on all alike:
  *   methods:   single, single-1lane, packet and stream at each set, the
@@ -11,7 +11,10 @@
  *              materials, 1 .. 256;
  *   clustered: single, packet and stream with 36 and 111 clustered
  *              materials (the paper's two scenes): Mrays/s and shading
- *              time against packet's, the paper's comparison.
+ *              time against packet's, the paper's comparison;
+ *   engine:    single and stream with 36 clustered materials again, their
+ *              rays traced by Embree (a lanes built with it): the same
+ *              paths, lanes' traversal against Embree's.
  * Utilisation does not depend on the run (the paths are the same); time
  * does. */
 #include "bench/study_paths.h"
@@ -25,13 +28,17 @@
 #include "build/material_assign.h"
 #include "build/scene_load.h"
 #include "trace/paths.h"
+#ifdef LANES_HAVE_COMPARE
+#include "bench/embree_adapter.h"
+#endif
 
 typedef struct {
     char scene[64], experiment[16];
     lanes_paths_method method;
     lanes_isa isa;
     int lanes, materials, stream, spp;
-    double mrays[64], utilization, shading_seconds[64];
+    bool embree; /* traced by Embree (lanes paths --intersector embree) */
+    double mrays[64], utilization, shading_seconds[64], intersect_seconds[64], shadow_seconds[64];
 } paths_row;
 
 typedef struct {
@@ -57,6 +64,10 @@ static paths_row *add(paths_rows *l)
 typedef struct {
     lanes_scene scene;
     lanes_render_accel accel[17];
+#ifdef LANES_HAVE_COMPARE
+    lanes_embree *embree; /* at Embree's best set, made when a row asks */
+    lanes_paths_intersector intersector;
+#endif
 } study_scene;
 
 static void scene_open(study_scene *s, const char *spec, int materials)
@@ -78,8 +89,28 @@ static const lanes_render_accel *scene_accel(study_scene *s, lanes_isa isa)
     return a;
 }
 
+/* Embree's intersector over the scene, or NULL in a lanes without Embree. */
+static const lanes_paths_intersector *scene_embree(study_scene *s)
+{
+#ifdef LANES_HAVE_COMPARE
+    lanes_error err;
+    if (!s->embree) {
+        if (lanes_embree_create(&s->scene, lanes_embree_isa_best(), 0, &s->embree, &err) != LANES_OK)
+            cli_fail("study --paths: %s", err.message);
+        s->intersector = lanes_embree_paths_intersector(s->embree);
+    }
+    return &s->intersector;
+#else
+    (void)s;
+    return NULL;
+#endif
+}
+
 static void scene_close(study_scene *s)
 {
+#ifdef LANES_HAVE_COMPARE
+    lanes_embree_destroy(s->embree);
+#endif
     for (int w = 0; w <= 16; w++)
         if (s->accel[w].wide.width) lanes_render_accel_free(&s->accel[w]);
     lanes_scene_free(&s->scene);
@@ -92,6 +123,7 @@ static void measure(paths_row *r, study_scene *s, const paths_study_options *o, 
     po.isa = r->isa, po.method = r->method, po.spp = r->spp, po.threads = o->threads;
     po.width = o->width, po.height = o->height;
     po.stream = r->stream;
+    po.intersector = r->embree ? scene_embree(s) : NULL;
     lanes_paths_result res;
     lanes_error err;
     if (lanes_paths_render(&s->scene, scene_accel(s, r->isa), &po, &res, &err) != LANES_OK)
@@ -101,6 +133,8 @@ static void measure(paths_row *r, study_scene *s, const paths_study_options *o, 
     r->mrays[round] = res.seconds > 0.0 ? (double)rays / res.seconds * 1e-6 : 0.0;
     r->utilization = res.shade_slots ? (double)res.shade_live / (double)res.shade_slots : 0.0;
     r->shading_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_SHADE];
+    r->intersect_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_INTERSECT];
+    r->shadow_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_SHADOW];
     lanes_paths_result_free(&res);
 }
 
@@ -116,12 +150,14 @@ static double median(const double *v, int n)
 static void write_csv(const char *path, const paths_rows *rows, int reps)
 {
     FILE *f = cli_create_file("study --paths", path);
-    fprintf(f, "scene,experiment,method,isa,lanes,materials,stream,spp,mrays,shading_utilization,shading_seconds\n");
+    fprintf(f, "scene,experiment,method,intersector,isa,lanes,materials,stream,spp,mrays,shading_utilization,shading_seconds,"
+               "intersect_seconds,shadow_seconds\n");
     for (size_t i = 0; i < rows->count; i++) {
         const paths_row *r = &rows->rows[i];
-        fprintf(f, "%s,%s,%s,%s,%d,%d,%d,%d,%.4f,%.4f,%.5f\n", r->scene, r->experiment, lanes_paths_method_name(r->method),
-                lanes_isa_name(r->isa), r->lanes, r->materials, r->stream, r->spp, median(r->mrays, reps), r->utilization,
-                median(r->shading_seconds, reps));
+        fprintf(f, "%s,%s,%s,%s,%s,%d,%d,%d,%d,%.4f,%.4f,%.5f,%.5f,%.5f\n", r->scene, r->experiment,
+                lanes_paths_method_name(r->method), r->embree ? "embree" : "lanes", lanes_isa_name(r->isa), r->lanes,
+                r->materials, r->stream, r->spp, median(r->mrays, reps), r->utilization, median(r->shading_seconds, reps),
+                median(r->intersect_seconds, reps), median(r->shadow_seconds, reps));
     }
     cli_finish_file("study --paths", path, f);
 }
@@ -137,15 +173,20 @@ static void write_json(const paths_rows *rows, int reps, const char *dir)
         const paths_row *r = &rows->rows[i];
         printf("%s{\"scene\": ", i ? ", " : "");
         cli_json_string(stdout, r->scene);
-        printf(", \"experiment\": \"%s\", \"method\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, \"materials\": %d, "
-               "\"stream\": %d, \"spp\": %d, \"mrays\": ",
-               r->experiment, lanes_paths_method_name(r->method), lanes_isa_name(r->isa), r->lanes, r->materials,
-               r->stream, r->spp);
+        printf(", \"experiment\": \"%s\", \"method\": \"%s\", \"intersector\": \"%s\", \"isa\": \"%s\", \"lanes\": %d, "
+               "\"materials\": %d, \"stream\": %d, \"spp\": %d, \"mrays\": ",
+               r->experiment, lanes_paths_method_name(r->method), r->embree ? "embree" : "lanes", lanes_isa_name(r->isa),
+               r->lanes, r->materials, r->stream, r->spp);
         cli_json_number(stdout, median(r->mrays, reps));
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, r->utilization);
         printf(", \"shading_seconds\": ");
         cli_json_number(stdout, median(r->shading_seconds, reps));
+        printf(", \"stage_seconds\": {\"intersect\": ");
+        cli_json_number(stdout, median(r->intersect_seconds, reps));
+        printf(", \"shadow\": ");
+        cli_json_number(stdout, median(r->shadow_seconds, reps));
+        printf("}");
         printf("}");
     }
     printf("]}\n");
@@ -223,6 +264,28 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
                     else fprintf(f, " %.3f | %.2f |\n", sh, sh > 0.0 ? sp / sh : 0.0);
                 }
             }
+        if (o->embree) {
+            fprintf(f, "\n## %s: the same paths traced by Embree (%s; single: rtcIntersect1 / rtcOccluded1, stream: rtcIntersect1M / "
+                       "rtcOccluded1M), 36 clustered "
+                       "materials\n\n| set | method | Mrays/s lanes | Mrays/s Embree | lanes / Embree | extension rays s, "
+                       "lanes / Embree | shadow rays s, lanes / Embree |\n|---|---|---|---|---|---|---|\n",
+                    scenes[s], o->embree_isa);
+            for (int j = 0; j < nsets; j++)
+                for (int m = LANES_PATHS_SINGLE; m <= LANES_PATHS_STREAM; m += LANES_PATHS_STREAM) {
+                    const paths_row *e = find(rows, scenes[s], "engine", (lanes_paths_method)m, sets[j], 36, -1);
+                    const paths_row *l = find(rows, scenes[s], "clustered", (lanes_paths_method)m, sets[j], 36, -1);
+                    if (!e || !l) continue;
+                    double ml = median(l->mrays, o->reps), me = median(e->mrays, o->reps);
+                    fprintf(f, "| %s | %s | %.2f | %.2f | %.2f |", lanes_isa_name(sets[j]), lanes_paths_method_name(e->method),
+                            ml, me, me > 0.0 ? ml / me : 0.0);
+                    if (m == LANES_PATHS_STREAM)
+                        fprintf(f, " %.3f / %.3f | %.3f / %.3f |\n", median(l->intersect_seconds, o->reps),
+                                median(e->intersect_seconds, o->reps), median(l->shadow_seconds, o->reps),
+                                median(e->shadow_seconds, o->reps));
+                    else
+                        fprintf(f, " - | - |\n");
+                }
+        }
         fprintf(f, "\n## %s: clustered materials: shading utilisation, packet / stream\n\n| materials |", scenes[s]);
         for (int j = 0; j < nsets; j++) fprintf(f, " %s |", lanes_isa_name(sets[j]));
         fprintf(f, "\n|---|");
@@ -333,6 +396,13 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
                     r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes;
                     r->materials = material_counts[k], r->stream = 2048, r->spp = o->spp;
                 }
+            for (int m = LANES_PATHS_SINGLE; m <= LANES_PATHS_STREAM && o->embree; m += LANES_PATHS_STREAM) {
+                paths_row *r = add(&rows);
+                snprintf(r->scene, sizeof r->scene, "%.63s", scenes[s]);
+                snprintf(r->experiment, sizeof r->experiment, "engine");
+                r->method = (lanes_paths_method)m, r->isa = sets[j], r->lanes = lanes, r->embree = true;
+                r->materials = 36, r->stream = 2048, r->spp = o->spp;
+            }
             for (int k = 0; k < 2; k++)
                 for (int m = LANES_PATHS_SINGLE; m <= LANES_PATHS_STREAM; m++) {
                     if (m == LANES_PATHS_SINGLE_1LANE) continue;
@@ -349,6 +419,7 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
                 paths_row *r = &rows.rows[i];
                 study_scene *sc = strcmp(r->experiment, "methods") == 0 ? &own
                                   : strcmp(r->experiment, "stream") == 0 ? &clustered36
+                                  : strcmp(r->experiment, "engine") == 0    ? &clustered36
                                   : strcmp(r->experiment, "clustered") == 0 ? (r->materials == 36 ? &clustered36 : &clustered111)
                                                                             : NULL;
                 for (int k = 0; !sc && k < NMAT; k++)

@@ -11,6 +11,8 @@ typedef struct paths_study_options {
     const char *out_dir;
     int width, height, spp, reps, threads;
     bool json;
+    bool embree;            /* also trace the same paths with Embree (a lanes built with it) */
+    const char *embree_isa; /* its set, for the tables */
 } paths_study_options;
 
 /* Measures the scenes named by specs at the given sets and writes

@@ -166,19 +166,34 @@ static bool prepare_lights(paths_job *job)
 
 /* ---- tracing one ray --------------------------------------------------- */
 
+/* n rays through the set's traversal or the caller's intersector. */
+static void trace_rays(const paths_job *job, const lanes_ray *rays, size_t n, lanes_hit *hits)
+{
+    const lanes_paths_intersector *x = job->opt->intersector;
+    if (x) x->trace(x->ctx, rays, n, hits);
+    else job->trace_k->trace_wide(&job->accel->wide, job->accuracy, rays, n, hits, NULL);
+}
+
+static void occluded_rays(const paths_job *job, const lanes_ray *rays, size_t n, uint8_t *occluded)
+{
+    const lanes_paths_intersector *x = job->opt->intersector;
+    if (x) x->occluded(x->ctx, rays, n, occluded);
+    else job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, rays, n, occluded, NULL);
+}
+
 static lanes_hit trace(const paths_job *job, vec3 o, vec3 d, float tfar)
 {
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
     lanes_hit h;
     lanes_ray_prepare_rcp(&r, job->rcp);
-    job->trace_k->trace_wide(&job->accel->wide, job->accuracy, &r, 1, &h, NULL);
+    trace_rays(job, &r, 1, &h);
     return h;
 }
 
 static bool occluded(const paths_job *job, const lanes_ray *r)
 {
     uint8_t hit = 0;
-    job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, r, 1, &hit, NULL);
+    occluded_rays(job, r, 1, &hit);
     return hit != 0;
 }
 
@@ -558,7 +573,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
         t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
         /* the packet's shadow rays in one call; each path's light before
          * its next bounce, as single-1lane adds them */
-        job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, shadow, (size_t)nsh, blocked, NULL);
+        occluded_rays(job, shadow, (size_t)nsh, blocked);
         for (int k = 0; k < nsh; k++)
             if (!blocked[k]) L[shadow_lane[k]].sum = v3_add(L[shadow_lane[k]].sum, shadow_add[k]);
         t = stage_clock(&stage[LANES_PATHS_STAGE_SHADOW], t);
@@ -696,7 +711,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             st->ray_slot[nr++] = (uint32_t)i;
         }
         t = stage_clock(&stage[LANES_PATHS_STAGE_GENERATE], t);
-        job->trace_k->trace_wide(&job->accel->wide, job->accuracy, st->rays, (size_t)nr, st->hits, NULL);
+        trace_rays(job, st->rays, (size_t)nr, st->hits);
         t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
         /* hits: background, emission; what is left to shade */
         int ns = 0;
@@ -785,7 +800,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
         t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
         /* the shadow stream, then each path's light before its next bounce
          * (the order single-1lane adds them in) */
-        job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, st->shadow, (size_t)nsh, st->occluded, NULL);
+        occluded_rays(job, st->shadow, (size_t)nsh, st->occluded);
         for (int i = 0; i < nsh; i++)
             if (!st->occluded[i]) {
                 packet_lane *l = &st->path[st->shadow_slot[i]];
@@ -897,6 +912,8 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
         (opt->stream < LANES_PATHS_MIN_STREAM || opt->stream > LANES_PATHS_MAX_STREAM || opt->stream % 16 != 0))
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: stream size %d (%d..%d, a multiple of 16)", opt->stream,
                                LANES_PATHS_MIN_STREAM, LANES_PATHS_MAX_STREAM);
+    if (opt->intersector && (!opt->intersector->trace || !opt->intersector->occluded))
+        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: an intersector needs both its trace and occluded calls");
     if (opt->method == LANES_PATHS_STREAM && scene->material_count > LANES_SORT_MAX_MATERIALS)
         return lanes_error_set(err, LANES_ERR_BAD_INPUT, "paths: %zu materials; the stream's sort takes at most %u",
                                scene->material_count, LANES_SORT_MAX_MATERIALS);

@@ -72,6 +72,18 @@ typedef enum lanes_paths_stage {
 } lanes_paths_stage;
 #define LANES_PATHS_MAX_SPP 65536
 
+/* Another engine to trace with in place of the set's own traversal (lanes
+ * paths --intersector embree races Embree's on the same paths): closest
+ * hits and occlusion of n rays, answered as trace_wide and occluded_wide
+ * answer (t, u, v, prim; LANES_NO_HIT for a miss). Called from every
+ * render thread at once; the set's shading kernels stay in use. */
+typedef struct lanes_paths_intersector {
+    const char *name;
+    void *ctx;
+    void (*trace)(void *ctx, const lanes_ray *rays, size_t n, lanes_hit *hits);
+    void (*occluded)(void *ctx, const lanes_ray *rays, size_t n, uint8_t *occluded);
+} lanes_paths_intersector;
+
 typedef struct lanes_paths_options {
     lanes_isa isa;
     lanes_paths_method method;
@@ -83,6 +95,7 @@ typedef struct lanes_paths_options {
     int stream;              /* stream method: paths in flight per thread, 256 .. 65536, a multiple of 16; default 2048 */
     bool uniform_background; /* misses see `background` instead of the sky */
     float background[3];
+    const lanes_paths_intersector *intersector; /* NULL: the set's own traversal */
 } lanes_paths_options;
 
 void lanes_paths_default_options(lanes_paths_options *o);
