@@ -404,3 +404,17 @@ void cli_progress_step(cli_progress *p, const char *what)
     }
     fflush(stderr);
 }
+
+cli_progress_bar cli_progress_bar_make(void) { return (cli_progress_bar){isatty(2) != 0, -1}; }
+
+void cli_show_progress(void *bar, double fraction)
+{
+    cli_progress_bar *p = bar;
+    int pct = (int)(fraction * 100.0);
+    if (!p->tty || pct == p->last) return;
+    p->last = pct;
+    int filled = pct * 40 / 100;
+    fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################", 40 - filled, "", pct);
+    if (pct == 100) fprintf(stderr, "\n");
+    fflush(stderr);
+}

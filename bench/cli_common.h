@@ -124,6 +124,15 @@ void cli_json_number(FILE *out, double x);
 /* CSV field, quoted only when it needs to be (RFC 4180). */
 void cli_csv_field(FILE *out, const char *s);
 
+/* A progress bar on stderr, drawn only on a terminal and only when the
+ * shown percentage changes: the renderers' progress callback. */
+typedef struct {
+    bool tty;
+    int last;
+} cli_progress_bar;
+cli_progress_bar cli_progress_bar_make(void);
+void cli_show_progress(void *bar, double fraction);
+
 /* Monotonic time in nanoseconds. */
 uint64_t cli_now_ns(void);
 /* CPU time the calling thread has used, in nanoseconds: compared with

@@ -20,7 +20,7 @@
 static int paths_run(cli_context *ctx, const cli_command *self, int argc, char **argv)
 {
     const char *scene_spec = NULL, *out_path = NULL, *value, *method_name = "single", *accuracy_name = NULL;
-    const char *assign_name = "cluster", *intersector_name = "lanes";
+    const char *assign_name = "cluster", *intersector_name = "lanes", *csv_path = NULL;
     int materials = 0;
     lanes_paths_options o;
     lanes_paths_default_options(&o);
@@ -42,6 +42,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
             materials = (int)cli_parse_count(&a, "--materials", value, 1, LANES_ASSIGN_MAX_MATERIALS);
         } else if (cli_value(&a, "--assign", &assign_name)) {
         } else if (cli_value(&a, "--intersector", &intersector_name)) {
+        } else if (cli_value(&a, "--csv", &csv_path)) {
         } else if (cli_value(&a, "--threads", &value)) {
             o.threads = (int)cli_parse_count(&a, "--threads", value, 1, 256);
         } else if (cli_value(&a, "--background", &value)) {
@@ -75,6 +76,10 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     if (with_embree) cli_fail("paths: --intersector embree: this lanes was built without Embree");
 #endif
     if (out_path) cli_make_parent_dirs("paths: -o", out_path);
+    /* opened first: a path that cannot be written fails before the render */
+    FILE *csv = csv_path ? cli_create_file("paths: --csv", csv_path) : NULL;
+    cli_progress_bar bar = cli_progress_bar_make();
+    if (!json) o.progress = cli_show_progress, o.progress_ctx = &bar;
     o.isa = lanes_isa_current();
     const lanes_kernels *k = lanes_kernels_for(o.isa);
 
@@ -126,6 +131,24 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     double mrays = r.seconds > 0.0 ? (double)rays / r.seconds * 1e-6 : 0.0;
     double utilization = r.shade_slots ? (double)r.shade_live / (double)r.shade_slots : 0.0;
     int threads = lanes_parallel_threads(o.threads);
+    static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
+                                                               "shade",    "shadow",    "accumulate"};
+    if (csv) {
+        fprintf(csv, "cpu,scene,method,intersector,isa,lanes,threads,stream,stream_bytes,materials,spp,depth,paths,rays,"
+                     "seconds,mrays,shading_utilization");
+        for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) fprintf(csv, ",%s_seconds", stages[i]);
+        fprintf(csv, "\n");
+        cli_csv_field(csv, lanes_cpu()->brand);
+        fputc(',', csv);
+        cli_csv_field(csv, scene.name);
+        fprintf(csv, ",%s,%s,%s,%d,%d,%d,%zu,%zu,%d,%d,%llu,%llu,%.6f,%.4f,%.4f", lanes_paths_method_name(o.method),
+                engine ? "embree" : "lanes", k->name, k->lanes, threads, o.method == LANES_PATHS_STREAM ? o.stream : 0,
+                r.stream_bytes, scene.material_count, o.spp, o.depth, (unsigned long long)r.paths, (unsigned long long)rays,
+                r.seconds, mrays, utilization);
+        for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) fprintf(csv, ",%.6f", r.stage_seconds[i]);
+        fprintf(csv, "\n");
+        cli_finish_file("paths: --csv", csv_path, csv);
+    }
     if (json) {
         printf("{\"cpu\": ");
         cli_json_string(stdout, lanes_cpu()->brand);
@@ -147,8 +170,6 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         printf(", \"intersector\": \"%s\"", engine ? "embree" : "lanes");
         if (o.method == LANES_PATHS_STREAM) printf(", \"stream\": %d, \"stream_bytes\": %zu", o.stream, r.stream_bytes);
         if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET) {
-            static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
-                                                                       "shade",    "shadow",    "accumulate"};
             printf(", \"shading_seconds\": ");
             cli_json_number(stdout, r.stage_seconds[LANES_PATHS_STAGE_SHADE]);
             printf(", \"stage_seconds\": {");
@@ -209,6 +230,7 @@ const cli_command cli_cmd_paths = {
              "  --size WxH            image size (default: the scene camera's)\n"
              "  --threads N           threads (default: all cores)\n"
              "  --json                the measurements as JSON\n"
+             "  --csv FILE            the measurements as a CSV row (with its header)\n"
              "  --isa NAME            instruction set\n",
     .run = paths_run,
 };

@@ -13,24 +13,6 @@
 #include "trace/render.h"
 #include "trace/scene_plan.h"
 
-typedef struct {
-    bool tty;
-    int last;
-} progress_bar;
-
-/* Redrawn only when the shown percentage changes, and only on a terminal. */
-static void show_progress(void *ctx, double fraction)
-{
-    progress_bar *p = ctx;
-    int pct = (int)(fraction * 100.0);
-    if (!p->tty || pct == p->last) return;
-    p->last = pct;
-    int filled = pct * 40 / 100;
-    fprintf(stderr, "\r[%.*s%*s] %3d%%", filled, "########################################", 40 - filled, "", pct);
-    if (pct == 100) fprintf(stderr, "\n");
-    fflush(stderr);
-}
-
 static void release_accels(lanes_render_accel *accel, lanes_device device, lanes_accel api_accel)
 {
     if (api_accel) {
@@ -147,8 +129,8 @@ static int render_run(cli_context *ctx, const cli_command *self, int argc, char 
     }
     double build_s = (double)(cli_now_ns() - t0) * 1e-9;
 
-    progress_bar bar = {isatty(2) != 0, -1};
-    po.base.progress = show_progress;
+    cli_progress_bar bar = cli_progress_bar_make();
+    po.base.progress = cli_show_progress;
     po.base.progress_ctx = &bar;
     lanes_render_result r;
     bool ok;

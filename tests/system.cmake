@@ -188,6 +188,7 @@ if(lanes_cli_target)
                      grep -q '\"shading_utilization\": 1' <<< \"$out\"; test -s \"$1/paths.exr\"; \
                      out=$(\"$0\" paths --size 16x16 --spp 2 --json --method stream --stream 256); echo \"$out\"; \
                      grep -q '\"stage_seconds\": {\"generate\"' <<< \"$out\"; \
+                     \"$0\" paths --size 16x16 --spp 1 --method packet --csv \"$1/paths.csv\" > /dev/null; grep -q ',default,packet,lanes,' \"$1/paths.csv\"; grep -q '^cpu,scene,method' \"$1/paths.csv\"; \
                      for bad in '--spp 0' '--depth 33' '--method bogus' '--background -1' '--stream 100' '--stream 1000' '--materials 0' '--assign everywhere'; do \
                        set +e; msg=$(\"$0\" paths --size 8x8 $bad 2>&1); s=$?; set -e; echo \"$bad: $s: $msg\" | head -2; \
                        test $s -eq 2; grep -q -- \"$\{bad%% *\}\" <<< \"$msg\"; done"

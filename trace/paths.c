@@ -4,6 +4,7 @@
 #include "trace/paths.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -881,12 +882,21 @@ static void render_tile(const paths_job *job, int tile, paths_counts *c)
 typedef struct {
     const paths_job *job;
     paths_counts *counts; /* per worker */
+    atomic_int tiles_done;
+    pthread_mutex_t progress_lock;
 } paths_loop;
 
 static void tile_task(void *ctx, size_t tile, int worker)
 {
     paths_loop *l = ctx;
     render_tile(l->job, (int)tile, &l->counts[worker]);
+    int done = atomic_fetch_add(&l->tiles_done, 1) + 1;
+    const lanes_paths_options *o = l->job->opt;
+    if (o->progress) {
+        pthread_mutex_lock(&l->progress_lock);
+        o->progress(o->progress_ctx, (double)done / ((double)l->job->tiles_x * (double)l->job->tiles_y));
+        pthread_mutex_unlock(&l->progress_lock);
+    }
 }
 
 static void free_job(paths_job *job)
@@ -982,8 +992,9 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     job.tiles_x = (job.width + 15) / 16;
     job.tiles_y = (job.height + 15) / 16;
     double t0 = lanes_render_clock();
-    paths_loop loop = {&job, counts};
+    paths_loop loop = {&job, counts, 0, PTHREAD_MUTEX_INITIALIZER};
     lanes_parallel_for(threads, (size_t)job.tiles_x * (size_t)job.tiles_y, tile_task, &loop);
+    pthread_mutex_destroy(&loop.progress_lock);
     out->seconds = lanes_render_clock() - t0;
     for (int i = 0; i < threads; i++) {
         out->paths += counts[i].paths;

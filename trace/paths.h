@@ -96,6 +96,10 @@ typedef struct lanes_paths_options {
     bool uniform_background; /* misses see `background` instead of the sky */
     float background[3];
     const lanes_paths_intersector *intersector; /* NULL: the set's own traversal */
+    /* Called with the fraction done after each tile, one call at a time
+     * (from any worker thread); may be NULL. */
+    void (*progress)(void *ctx, double fraction);
+    void *progress_ctx;
 } lanes_paths_options;
 
 void lanes_paths_default_options(lanes_paths_options *o);
