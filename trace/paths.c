@@ -211,6 +211,11 @@ static frame frame_around(vec3 n)
     return (frame){v3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x), v3(b, sign + n.y * n.y * a, -n.y), n};
 }
 
+/* The shading frame of a surface: around the triangle's own normal (by its
+ * winding), whichever side the ray came from. Made where it is needed, not
+ * kept with a path in flight. */
+static frame surface_frame(const lanes_surface *sf) { return frame_around(sf->front ? sf->nf : v3_scale(sf->nf, -1.0f)); }
+
 static vec3 to_local(const frame *f, vec3 v) { return v3(v3_dot(v, f->t), v3_dot(v, f->b), v3_dot(v, f->n)); }
 
 static vec3 to_world(const frame *f, vec3 v)
@@ -335,11 +340,11 @@ static vec3 next_event(const paths_job *job, const lanes_surface *sf, const fram
 /* Where a path's ray arrives, for every method alike: a miss adds the
  * background, a hit its emission where it counts; false when the path
  * ends there (a miss or an emitter), else the surface, its material and
- * the shading frame with wo in it. The frame's normal is the triangle's
- * own (by its winding): glass tells inside from outside by it, the opaque
- * BSDFs are two-sided. */
+ * wo in its shading frame (surface_frame: the triangle's own normal, by
+ * its winding; glass tells inside from outside by it, the opaque BSDFs
+ * are two-sided). */
 static bool path_vertex(const paths_job *job, const lanes_hit *h, vec3 d, vec3 beta, bool after_delta, vec3 *sum,
-                        lanes_surface *sf, uint32_t *material, frame *fr, vec3 *wo)
+                        lanes_surface *sf, uint32_t *material, vec3 *wo)
 {
     if (h->prim == LANES_NO_HIT) {
         *sum = v3_add(*sum, v3_mul(beta, background(job, d)));
@@ -354,8 +359,8 @@ static bool path_vertex(const paths_job *job, const lanes_hit *h, vec3 d, vec3 b
         if (counts) *sum = v3_add(*sum, v3_mul(beta, v3_load(m->emission)));
     }
     if (m->kind == LANES_MAT_EMISSIVE) return false;
-    *fr = frame_around(sf->front ? sf->nf : v3_scale(sf->nf, -1.0f));
-    *wo = to_local(fr, v3_scale(v3_normalize(d), -1.0f));
+    frame fr = surface_frame(sf);
+    *wo = to_local(&fr, v3_scale(v3_normalize(d), -1.0f));
     return true;
 }
 
@@ -399,9 +404,9 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
         lanes_hit h = trace(job, o, d, INFINITY);
         lanes_surface sf;
         uint32_t mi;
-        frame fr;
         vec3 wo;
-        if (!path_vertex(job, &h, d, beta, after_delta, &sum, &sf, &mi, &fr, &wo)) break;
+        if (!path_vertex(job, &h, d, beta, after_delta, &sum, &sf, &mi, &wo)) break;
+        frame fr = surface_frame(&sf);
         const lanes_bsdf *b = &job->bsdf[mi];
         float p3[3] = {sf.p.x, sf.p.y, sf.p.z}, albedo3[3];
         const float *albedo = albedo_at(job, mi, 1, p3, albedo3);
@@ -453,10 +458,8 @@ typedef struct {
     uint32_t pixel, sample, material;
     bool alive, after_delta;
     lanes_surface sf;
-    frame fr;
-    light_sample ls;
-    /* streams: the path's bounce, its pixel in the tile, and its sampled
-     * direction until the shadow rays are traced */
+    /* the path's bounce and its pixel in the tile (streams), and its
+     * sampled direction until the shadow rays are traced */
     uint32_t ss_depth, tile_index;
     uint8_t pending_flags;
     float pending_wi[3], pending_w[3];
@@ -488,6 +491,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
     vec3 shadow_add[LANES_MAX_W];
     int shadow_lane[LANES_MAX_W];
     uint8_t blocked[LANES_MAX_W];
+    light_sample ls[LANES_MAX_W]; /* each lane's light sample, while its material shades */
     double *stage = c->stage_seconds, t = lanes_render_clock();
     for (int i = 0; i < n; i++) {
         memset(&L[i], 0, sizeof L[i]);
@@ -509,7 +513,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
             packet_lane *l = &L[i];
             if (!l->alive) continue;
             c->by_depth[depth]++;
-            l->alive = path_vertex(job, &hits[i], l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
+            l->alive = path_vertex(job, &hits[i], l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->wo);
             any = any || l->alive;
         }
         if (!any) {
@@ -533,11 +537,14 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 uint32_t lit = 0;
                 for (int i = 0; i < w; i++) {
                     bool in = i < n && (mask >> i & 1u);
-                    if (in) L[i].ls = light_pick(job, &L[i].sf, &L[i].fr, L[i].pixel, L[i].sample, (uint32_t)depth);
-                    bool active = in && L[i].ls.active;
+                    if (in) {
+                        frame fr = surface_frame(&L[i].sf);
+                        ls[i] = light_pick(job, &L[i].sf, &fr, L[i].pixel, L[i].sample, (uint32_t)depth);
+                    }
+                    bool active = in && ls[i].active;
                     lit |= (uint32_t)active << i;
                     soa_put(q.wo, w, i, active ? L[i].wo : up);
-                    soa_put(q.wi, w, i, active ? L[i].ls.wi_local : up);
+                    soa_put(q.wi, w, i, active ? ls[i].wi_local : up);
                 }
                 if (lit) {
                     job->shade_k->bsdf_eval(b, (size_t)w, albedo, q.wo, q.wi, q.f, q.pdf);
@@ -546,9 +553,9 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                         vec3 f = v3(q.f[i], q.f[w + i], q.f[2 * w + i]);
                         if (!(lit >> i & 1u) || is_black(f)) continue;
                         c->shadow++;
-                        if (!shadow_ray(job, &L[i].sf, &L[i].ls, &shadow[nsh])) continue;
+                        if (!shadow_ray(job, &L[i].sf, &ls[i], &shadow[nsh])) continue;
                         shadow_lane[nsh] = i;
-                        shadow_add[nsh++] = v3_mul(L[i].beta, light_value(&L[i].ls, f));
+                        shadow_add[nsh++] = v3_mul(L[i].beta, light_value(&ls[i], f));
                     }
                 }
             }
@@ -582,7 +589,8 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
             packet_lane *l = &L[i];
             if (!l->alive) continue;
             l->after_delta = (l->pending_flags & LANES_BSDF_DELTA) != 0;
-            l->alive = continue_path(job, &l->sf, &l->fr, l->pending_wi, l->pending_w, depth, l->pixel, l->sample, &l->beta,
+            frame fr = surface_frame(&l->sf);
+            l->alive = continue_path(job, &l->sf, &fr, l->pending_wi, l->pending_w, depth, l->pixel, l->sample, &l->beta,
                                      &l->o, &l->d);
         }
         t = stage_clock(&stage[LANES_PATHS_STAGE_ACCUMULATE], t);
@@ -634,11 +642,14 @@ struct stream_state {
  * the image is the same bit for bit as the other methods'. */
 enum { STREAM_CHUNK_SAMPLES = 64 };
 
-static size_t stream_bytes(int size, size_t materials)
+/* A chunk's samples for spp samples per pixel. */
+static int chunk_samples(int spp) { return spp < STREAM_CHUNK_SAMPLES ? spp : STREAM_CHUNK_SAMPLES; }
+
+static size_t stream_bytes(int size, size_t materials, int spp)
 {
     return (size_t)size * (sizeof(packet_lane) + 2 * sizeof(lanes_ray) + sizeof(lanes_hit) + 6 * sizeof(uint32_t) +
                            sizeof(vec3) + 1) +
-           (materials + 1) * sizeof(uint32_t) + 256 * STREAM_CHUNK_SAMPLES * sizeof(vec3);
+           (materials + 1) * sizeof(uint32_t) + 256 * (size_t)chunk_samples(spp) * sizeof(vec3);
 }
 
 static void stream_free(stream_state *st)
@@ -650,7 +661,7 @@ static void stream_free(stream_state *st)
     memset(st, 0, sizeof *st);
 }
 
-static bool stream_alloc(stream_state *st, int size, size_t materials)
+static bool stream_alloc(stream_state *st, int size, size_t materials, int spp)
 {
     size_t n = (size_t)size;
     st->size = size;
@@ -667,7 +678,7 @@ static bool stream_alloc(stream_state *st, int size, size_t materials)
     st->shadow_add = calloc(n, sizeof *st->shadow_add);
     st->occluded = calloc(n, 1);
     st->free_slots = calloc(n, sizeof *st->free_slots);
-    st->radiance = calloc(256 * STREAM_CHUNK_SAMPLES, sizeof *st->radiance);
+    st->radiance = calloc(256 * (size_t)chunk_samples(spp), sizeof *st->radiance);
     return st->path && st->rays && st->hits && st->ray_slot && st->shade_slot && st->shade_material && st->offsets &&
            st->sorted && st->shadow && st->shadow_slot && st->shadow_add && st->occluded && st->free_slots &&
            st->radiance;
@@ -722,7 +733,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             int depth = (int)l->ss_depth;
             c->by_depth[depth]++;
             const lanes_hit *h = &st->hits[r];
-            l->alive = path_vertex(job, h, l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->fr, &l->wo);
+            l->alive = path_vertex(job, h, l->d, l->beta, l->after_delta, &l->sum, &l->sf, &l->material, &l->wo);
             if (l->alive) st->shade_slot[ns] = slot, st->shade_material[ns++] = l->material;
         }
         t = stage_clock(&stage[LANES_PATHS_STAGE_SHADE], t);
@@ -752,12 +763,14 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                 const float *albedo = albedo_at(job, mat, (size_t)n, p_c, albedo_c);
                 if (!delta) {
                     int lit = 0, lit_lane[LANES_MAX_W];
+                    light_sample ls[LANES_MAX_W]; /* the lit lanes', compact */
                     for (int i = 0; i < n; i++) {
                         packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
-                        l->ls = light_pick(job, &l->sf, &l->fr, l->pixel, l->sample, l->ss_depth);
-                        if (!l->ls.active) continue;
+                        frame fr = surface_frame(&l->sf);
+                        ls[lit] = light_pick(job, &l->sf, &fr, l->pixel, l->sample, l->ss_depth);
+                        if (!ls[lit].active) continue;
                         soa_put(q.wo, w, lit, l->wo);
-                        soa_put(q.wi, w, lit, l->ls.wi_local);
+                        soa_put(q.wi, w, lit, ls[lit].wi_local);
                         lit_lane[lit++] = i;
                     }
                     if (lit > 0) {
@@ -776,9 +789,9 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                             vec3 f = v3(q.f[j], q.f[lit + j], q.f[2 * lit + j]);
                             if (is_black(f)) continue;
                             c->shadow++;
-                            if (!shadow_ray(job, &l->sf, &l->ls, &st->shadow[nsh])) continue;
+                            if (!shadow_ray(job, &l->sf, &ls[j], &st->shadow[nsh])) continue;
                             st->shadow_slot[nsh] = slot;
-                            st->shadow_add[nsh++] = v3_mul(l->beta, light_value(&l->ls, f));
+                            st->shadow_add[nsh++] = v3_mul(l->beta, light_value(&ls[j], f));
                         }
                     }
                 }
@@ -814,7 +827,8 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             bool go = (l->pending_flags & LANES_BSDF_VALID) != 0;
             if (go) {
                 l->after_delta = (l->pending_flags & LANES_BSDF_DELTA) != 0;
-                go = continue_path(job, &l->sf, &l->fr, l->pending_wi, l->pending_w, (int)l->ss_depth, l->pixel,
+                frame fr = surface_frame(&l->sf);
+                go = continue_path(job, &l->sf, &fr, l->pending_wi, l->pending_w, (int)l->ss_depth, l->pixel,
                                    l->sample, &l->beta, &l->o, &l->d);
             }
             l->ss_depth++;
@@ -980,7 +994,7 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     stream_state *streams = opt->method == LANES_PATHS_STREAM ? calloc((size_t)threads, sizeof *streams) : NULL;
     bool ok = job.rgb && job.rgb2 && counts && (opt->method != LANES_PATHS_STREAM || streams);
     for (int i = 0; ok && streams && i < threads; i++) {
-        ok = stream_alloc(&streams[i], opt->stream, scene->material_count);
+        ok = stream_alloc(&streams[i], opt->stream, scene->material_count, opt->spp);
         counts[i].stream = &streams[i];
     }
     if (!ok) {
@@ -988,7 +1002,7 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
         free(streams), free(job.rgb), free(job.rgb2), free(counts), free_job(&job);
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "paths: out of memory for the image or the streams");
     }
-    if (streams) out->stream_bytes = stream_bytes(opt->stream, scene->material_count);
+    if (streams) out->stream_bytes = stream_bytes(opt->stream, scene->material_count, opt->spp);
     job.tiles_x = (job.width + 15) / 16;
     job.tiles_y = (job.height + 15) / 16;
     double t0 = lanes_render_clock();
