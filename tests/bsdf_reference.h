@@ -7,7 +7,9 @@
 #include "trace/bsdf.h"
 
 /* f(wo, wi) per channel and the pdf of bsdf_sample's directions; 0 for the
- * delta kinds. Directions unit length, in the shading frame. */
+ * delta kinds. Directions unit length, in the shading frame. Rough glass's
+ * transmission without the radiance scaling (eta_o / eta_i)^2, as the
+ * library's: f(wo, wi) eta_o^2 = f(wi, wo) eta_i^2. */
 void ref_bsdf_eval(const lanes_bsdf *b, const double wo[3], const double wi[3], double f[3], double *pdf);
 
 /* Reflectance of a smooth dielectric, light from the side of index eta_i

@@ -2,15 +2,20 @@
  * CPU runs, against the double-precision references of bsdf_reference.c:
  *   - eval and pdf within a stated relative error, on random directions
  *     and parameters, both sides of the surface;
- *   - reciprocity: f(wo, wi) = f(wi, wo);
+ *   - reciprocity: f(wo, wi) = f(wi, wo); for rough glass's transmission,
+ *     which leaves out the radiance scaling, f(wo, wi) eta_o^2 =
+ *     f(wi, wo) eta_i^2 (eta_o, eta_i the indices on wo's and wi's sides);
  *   - every sampled direction: unit length, on the right side, its pdf and
  *     weight (f cos / pdf) those of the reference; glass by Snell's law;
+ *     an invalid sample has weight and pdf 0;
  *   - the sampler is unbiased: the mean weight equals the reference's
  *     directional albedo (a quadrature), which is at most 1; glass
  *     reflects with the Fresnel probability;
  *   - the sampled directions follow the pdf: a chi-square test over a
  *     grid of (cos theta, phi) bins, the expected counts integrated from
- *     the reference pdf.
+ *     the reference pdf; over the sphere for rough glass;
+ *   - rough glass at degenerate directions (in the plane, no microfacet
+ *     between them): f, pdf and weights 0, never NaN.
  *
  *   test_bsdf [--isa a,b,...] */
 #include <math.h>
@@ -36,7 +41,7 @@ typedef void (*sample_fn)(const lanes_bsdf *, size_t, const float *, const float
 
 enum { N = 1 << 14 }; /* directions per batch */
 
-static const char *const kind_names[] = {"lambert", "mirror", "conductor", "plastic", "glass"};
+static const char *const kind_names[] = {"lambert", "mirror", "conductor", "plastic", "glass", "rough_glass"};
 
 typedef struct {
     float wo[3 * N], wi[3 * N], u[3 * N], f[3 * N], pdf[N], weight[3 * N];
@@ -65,6 +70,8 @@ static lanes_bsdf random_bsdf(harness_rng *r, lanes_bsdf_kind kind)
     for (int k = 0; k < 3; k++) b.albedo[k] = (float)harness_uniform(r), b.f0[k] = (float)harness_uniform(r);
     b.roughness = (float)(0.05 + 0.95 * harness_uniform(r));
     b.ior = (float)(1.1 + 1.4 * harness_uniform(r));
+    /* rough glass: a quarter of them less dense inside (a bubble) */
+    if (kind == LANES_BSDF_ROUGH_GLASS && harness_uniform(r) < 0.25) b.ior = 1.0f / b.ior;
     return b;
 }
 
@@ -72,12 +79,27 @@ static bool near(double got, double want) { return fabs(got - want) <= REL_TOL *
 
 static double rel_err(double got, double want) { return fabs(got - want) / fmax(fabs(want), 1e-30); }
 
+/* The index on d's side for rough glass: 1 outside (+z), ior inside. */
+static double side_index(const lanes_bsdf *b, const double d[3]) { return d[2] > 0.0 ? 1.0 : (double)b->ior; }
+
+/* wo refracted through the surface (normal +z) into wt; false beyond the
+ * critical angle. */
+static bool refracted(const lanes_bsdf *b, const double wo[3], double wt[3])
+{
+    double s = wo[2] > 0.0 ? 1.0 : -1.0, eta = wo[2] > 0.0 ? 1.0 / b->ior : (double)b->ior, c = fabs(wo[2]);
+    double k = 1.0 - eta * eta * (1.0 - c * c);
+    if (k <= 0.0) return false;
+    double ct = sqrt(k);
+    wt[0] = -eta * wo[0], wt[1] = -eta * wo[1], wt[2] = -s * ct;
+    return true;
+}
+
 /* ---- eval, pdf, reciprocity ------------------------------------------- */
 
 static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
 {
-    for (int kind = 0; kind <= LANES_BSDF_GLASS; kind++) {
-        double worst = 0.0;
+    for (int kind = 0; kind <= LANES_BSDF_ROUGH_GLASS; kind++) {
+        double worst = 0.0, worst_t = 0.0, worst_pdf = 0.0; /* f reflected, transmitted; pdf */
         for (int round = 0; round < 4; round++) {
             lanes_bsdf b = random_bsdf(r, (lanes_bsdf_kind)kind);
             for (size_t i = 0; i < N; i++) {
@@ -85,9 +107,11 @@ static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
                 random_direction(r, wo);
                 random_direction(r, wi);
                 if (i % 2) {
-                    /* near the mirror direction, where a sharp lobe peaks */
-                    double e = pow(10.0, -4.0 * harness_uniform(r));
-                    for (int k = 0; k < 3; k++) wi[k] = (k < 2 ? -wo[k] : wo[k]) + e * wi[k];
+                    /* near the mirror direction, where a sharp lobe peaks;
+                     * for rough glass every other one near the refracted */
+                    double e = pow(10.0, -4.0 * harness_uniform(r)), peak[3] = {-wo[0], -wo[1], wo[2]};
+                    if (kind == LANES_BSDF_ROUGH_GLASS && i % 4 == 3) refracted(&b, wo, peak);
+                    for (int k = 0; k < 3; k++) wi[k] = peak[k] + e * wi[k];
                     double len = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
                     for (int k = 0; k < 3; k++) wi[k] /= len;
                 }
@@ -107,21 +131,40 @@ static void test_eval(const char *isa, eval_fn eval, batch *bt, harness_rng *r)
                            (double)bt->f[i], (double)bt->f[N + i], (double)bt->f[2 * N + i], (double)bt->pdf[i], f[0],
                            f[1], f[2], pdf))
                     continue;
-                if (f[0] > 1e-3) worst = fmax(worst, rel_err(bt->f[i], f[0]));
+                if (f[0] > 1e-3) {
+                    double e = rel_err(bt->f[i], f[0]);
+                    if (wo[2] * wi[2] > 0.0)
+                        worst = fmax(worst, e);
+                    else
+                        worst_t = fmax(worst_t, e);
+                }
+                if (pdf > 1e-3) worst_pdf = fmax(worst_pdf, rel_err(bt->pdf[i], pdf));
             }
-            /* reciprocity: the same call with the directions swapped */
+            /* reciprocity: the same call with the directions swapped; rough
+             * glass's transmission f(wi, wo) = f(wo, wi) eta_o^2 / eta_i^2 */
             memcpy(bt->u, bt->f, sizeof bt->f); /* keep f(wo, wi) */
             eval(&b, N, NULL, bt->wi, bt->wo, bt->f, bt->pdf);
             for (size_t i = 0; i < 3 * N; i++) {
-                double wo[3], wi[3];
+                double wo[3], wi[3], scale = 1.0;
                 get(bt->wo, i % N, wo);
                 get(bt->wi, i % N, wi);
-                CHECK(near(bt->f[i], bt->u[i]), "%s %s (roughness %g): f(wi, wo) = %g, f(wo, wi) = %g, wo (%a %a %a) wi (%a %a %a)",
-                      isa, kind_names[kind], (double)b.roughness, (double)bt->f[i], (double)bt->u[i], wo[0], wo[1], wo[2],
-                      wi[0], wi[1], wi[2]);
+                if (kind == LANES_BSDF_ROUGH_GLASS && wo[2] * wi[2] < 0.0) {
+                    double q = side_index(&b, wo) / side_index(&b, wi);
+                    scale = q * q;
+                }
+                CHECK(near(bt->f[i], scale * bt->u[i]),
+                      "%s %s (roughness %g, ior %g): f(wi, wo) = %g, f(wo, wi) = %g (times %g), "
+                      "wo (%a %a %a) wi (%a %a %a)",
+                      isa, kind_names[kind], (double)b.roughness, (double)b.ior, (double)bt->f[i], (double)bt->u[i],
+                      scale, wo[0], wo[1], wo[2], wi[0], wi[1], wi[2]);
             }
         }
-        printf("  %s %s: eval worst relative error %.2g (stated %.0e)\n", isa, kind_names[kind], worst, REL_TOL);
+        if (kind == LANES_BSDF_ROUGH_GLASS)
+            printf("  %s %s: eval worst relative error %.2g reflected, %.2g transmitted, pdf %.2g (stated %.0e)\n", isa,
+                   kind_names[kind], worst, worst_t, worst_pdf, REL_TOL);
+        else
+            printf("  %s %s: eval worst relative error %.2g, pdf %.2g (stated %.0e)\n", isa, kind_names[kind], worst,
+                   worst_pdf, REL_TOL);
     }
 }
 
@@ -148,6 +191,10 @@ static void check_samples(const char *isa, const lanes_bsdf *b, const batch *bt)
         if (!CHECK(delta == is_delta, "%s %s: delta flag %d", isa, kind_names[b->kind], delta)) continue;
         if (!valid) {
             CHECK(!is_delta, "%s %s: a delta sample marked invalid", isa, kind_names[b->kind]);
+            CHECK(bt->pdf[i] == 0.0f && bt->weight[i] == 0.0f && bt->weight[N + i] == 0.0f &&
+                      bt->weight[2 * N + i] == 0.0f,
+                  "%s %s: an invalid sample with pdf %g, weight %g %g %g", isa, kind_names[b->kind], (double)bt->pdf[i],
+                  (double)bt->weight[i], (double)bt->weight[N + i], (double)bt->weight[2 * N + i]);
             continue;
         }
         double len = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
@@ -173,10 +220,12 @@ static void check_samples(const char *isa, const lanes_bsdf *b, const batch *bt)
             }
             continue;
         }
-        if (!CHECK(wi[2] * wo[2] > 0.0, "%s %s: sampled wi on the other side", isa, kind_names[b->kind])) continue;
+        if (!CHECK(wi[2] * wo[2] > 0.0 || (b->kind == LANES_BSDF_ROUGH_GLASS && wi[2] * wo[2] < 0.0),
+                   "%s %s: sampled wi on the other side", isa, kind_names[b->kind]))
+            continue;
         ref_bsdf_eval(b, wo, wi, f, &pdf);
-        CHECK(near(bt->pdf[i], pdf), "%s %s (roughness %g): sample pdf %g, reference %g", isa, kind_names[b->kind],
-              (double)b->roughness, (double)bt->pdf[i], pdf);
+        CHECK(near(bt->pdf[i], pdf) && pdf > 0.0, "%s %s (roughness %g): sample pdf %g, reference %g", isa,
+              kind_names[b->kind], (double)b->roughness, (double)bt->pdf[i], pdf);
         for (int k = 0; k < 3; k++) {
             double want = f[k] * fabs(wi[2]) / pdf, got = bt->weight[(size_t)k * N + i];
             CHECK(fabs(got - want) <= 4 * REL_TOL * want + ABS_TOL, "%s %s: weight %g, reference f cos / pdf %g", isa,
@@ -209,7 +258,7 @@ static double albedo_quadrature(const lanes_bsdf *b, const double wo[3])
 static void test_sampling(const char *isa, sample_fn sample, batch *bt, harness_rng *r)
 {
     /* every sample, random parameters and directions */
-    for (int kind = 0; kind <= LANES_BSDF_GLASS; kind++)
+    for (int kind = 0; kind <= LANES_BSDF_ROUGH_GLASS; kind++)
         for (int round = 0; round < 8; round++) {
             lanes_bsdf b = random_bsdf(r, (lanes_bsdf_kind)kind);
             double wo[3];
@@ -258,6 +307,42 @@ static void test_sampling(const char *isa, sample_fn sample, batch *bt, harness_
         CHECK(fabs((double)reflected / N - p) <= 5.0 * sd + 1e-9, "%s glass at %g degrees: reflected %.4f, Fresnel %.4f",
               isa, glass_angles[a], (double)reflected / N, p);
     }
+
+    /* rough glass, white: unbiased, and at most 1 (without the radiance
+     * scaling the mean weight is the part of the light the surface keeps,
+     * reflected or transmitted), from outside and from inside (angles past
+     * 90), denser and less dense inside */
+    static const struct {
+        float roughness, ior;
+        double angle;
+    } rg[] = {{0.3f, 1.5f, 0.0},    {0.3f, 1.5f, 45.0},  {0.3f, 1.5f, 80.0},  {0.3f, 1.5f, 180.0}, {0.3f, 1.5f, 135.0},
+              {0.3f, 1.5f, 100.0},  {0.7f, 1.5f, 0.0},   {0.7f, 1.5f, 45.0},  {0.7f, 1.5f, 80.0},  {0.7f, 1.5f, 180.0},
+              {0.7f, 1.5f, 135.0},  {0.7f, 1.5f, 100.0}, {0.5f, 0.75f, 30.0}, {0.5f, 0.75f, 150.0}};
+    enum { RG = sizeof rg / sizeof rg[0] };
+    for (size_t c = 0; c < RG; c++) {
+        lanes_bsdf b = {.kind = LANES_BSDF_ROUGH_GLASS, .albedo = {1, 1, 1}, .roughness = rg[c].roughness,
+                        .ior = rg[c].ior};
+        double t = rg[c].angle * PI / 180.0, wo[3] = {sin(t), 0.0, cos(t)};
+        double sum = 0.0, sum2 = 0.0;
+        for (int rep = 0; rep < 8; rep++) {
+            sample_batch(sample, bt, &b, wo, r);
+            for (size_t i = 0; i < N; i++) sum += bt->weight[i], sum2 += (double)bt->weight[i] * bt->weight[i];
+        }
+        double n = 8.0 * N, mean = sum / n, sd = sqrt(fmax(0.0, sum2 / n - mean * mean) / n);
+        static double cached[RG];
+        if (cached[c] == 0.0) cached[c] = albedo_quadrature(&b, wo);
+        double want = cached[c];
+        CHECK(want <= 1.0 + 1e-3, "%s rough_glass (roughness %g, ior %g) at %g degrees: albedo %.5f above 1", isa,
+              (double)b.roughness, (double)b.ior, rg[c].angle, want);
+        CHECK(mean <= 1.0 + 5.0 * sd + 1e-3,
+              "%s rough_glass (roughness %g, ior %g) at %g degrees: mean weight %.5f +- %.5f above 1", isa,
+              (double)b.roughness, (double)b.ior, rg[c].angle, mean, sd);
+        CHECK(fabs(mean - want) <= 5.0 * sd + 2e-3,
+              "%s rough_glass (roughness %g, ior %g) at %g degrees: mean weight %.5f +- %.5f, albedo %.5f", isa,
+              (double)b.roughness, (double)b.ior, rg[c].angle, mean, sd, want);
+        printf("  %s rough_glass (roughness %.1f, ior %.2f) at %.0f degrees: mean weight %.5f +- %.5f, albedo %.5f\n",
+               isa, (double)b.roughness, (double)b.ior, rg[c].angle, mean, sd, want);
+    }
 }
 
 /* ---- chi-square of the sampled directions ------------------------------ */
@@ -298,36 +383,42 @@ enum { ZB = 16, PB = 32, SUB = 4, ROUNDS = 16 };
 static void chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng *r, lanes_bsdf b, double theta)
 {
     double t = theta * PI / 180.0, wo[3] = {sin(t), 0.0, cos(t)};
-    static double expected[ZB * PB + 1];
-    static long observed[ZB * PB + 1];
+    static double expected[2 * ZB * PB + 1];
+    static long observed[2 * ZB * PB + 1];
     memset(observed, 0, sizeof observed);
-    /* bins over the upper hemisphere in (z, phi), and one for no direction */
+    /* bins over the upper hemisphere in (z, phi), for rough glass over the
+     * sphere (z from -1, twice the rows), and one for no direction. Rough
+     * glass's transmitted lobe is narrower than its microfacets' (a third
+     * at normal incidence into ior 1.5): 16 x 16 points integrate a bin. */
+    const bool sphere = b.kind == LANES_BSDF_ROUGH_GLASS;
+    const int zb = sphere ? 2 * ZB : ZB, sub = sphere ? 4 * SUB : SUB, nb = zb * PB;
+    const double z0 = sphere ? -1.0 : 0.0, dz = (1.0 - z0) / zb;
     double total = 0.0;
-    for (int i = 0; i < ZB; i++)
+    for (int i = 0; i < zb; i++)
         for (int j = 0; j < PB; j++) {
             double sum = 0.0;
-            for (int si = 0; si < SUB; si++)
-                for (int sj = 0; sj < SUB; sj++) {
-                    double z = (i + (si + 0.5) / SUB) / ZB, phi = 2.0 * PI * (j + (sj + 0.5) / SUB) / PB;
+            for (int si = 0; si < sub; si++)
+                for (int sj = 0; sj < sub; sj++) {
+                    double z = z0 + (i + (si + 0.5) / sub) * dz, phi = 2.0 * PI * (j + (sj + 0.5) / sub) / PB;
                     double s = sqrt(1.0 - z * z), wi[3] = {s * cos(phi), s * sin(phi), z}, f[3], pdf;
                     ref_bsdf_eval(&b, wo, wi, f, &pdf);
                     sum += pdf;
                 }
-            expected[i * PB + j] = sum / (SUB * SUB) * (1.0 / ZB) * (2.0 * PI / PB);
+            expected[i * PB + j] = sum / (sub * sub) * dz * (2.0 * PI / PB);
             total += expected[i * PB + j];
         }
-    expected[ZB * PB] = fmax(0.0, 1.0 - total);
+    expected[nb] = fmax(0.0, 1.0 - total);
     for (int round = 0; round < ROUNDS; round++) {
         sample_batch(sample, bt, &b, wo, r);
         for (size_t i = 0; i < N; i++) {
             if (!(bt->flags[i] & LANES_BSDF_VALID)) {
-                observed[ZB * PB]++;
+                observed[nb]++;
                 continue;
             }
             double z = bt->wi[2 * N + i], phi = atan2(bt->wi[N + i], bt->wi[i]);
             if (phi < 0.0) phi += 2.0 * PI;
-            int zi = (int)(z * ZB), pj = (int)(phi / (2.0 * PI) * PB);
-            zi = zi < 0 ? 0 : zi >= ZB ? ZB - 1 : zi;
+            int zi = (int)floor((z - z0) / dz), pj = (int)(phi / (2.0 * PI) * PB);
+            zi = zi < 0 ? 0 : zi >= zb ? zb - 1 : zi;
             pj = pj < 0 ? 0 : pj >= PB ? PB - 1 : pj;
             observed[zi * PB + pj]++;
         }
@@ -337,7 +428,7 @@ static void chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng
     double chi2 = 0.0, pool_e = 0.0;
     long pool_o = 0;
     int bins = 0;
-    for (int k = 0; k <= ZB * PB; k++) {
+    for (int k = 0; k <= nb; k++) {
         double e = expected[k] * n;
         if (e < 5.0) {
             pool_e += e, pool_o += observed[k];
@@ -351,12 +442,14 @@ static void chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng
         bins++;
     }
     double p = gamma_q((bins - 1) / 2.0, chi2 / 2.0);
-    printf("  %s %s (roughness %.1f) at %.0f degrees: chi-square %.1f over %d bins, p = %.3f\n", isa,
-           kind_names[b.kind], (double)b.roughness, theta, chi2, bins, p);
+    char ior[32] = "";
+    if (sphere) snprintf(ior, sizeof ior, ", ior %.2f", (double)b.ior);
+    printf("  %s %s (roughness %.1f%s) at %.0f degrees: chi-square %.1f over %d bins, p = %.3f\n", isa,
+           kind_names[b.kind], (double)b.roughness, ior, theta, chi2, bins, p);
     /* about twenty such tests per set: 1e-3 each keeps a correct sampler's
      * chance of failing one low, and a wrong pdf gives p ~ 0 */
-    CHECK(p > 1e-3, "%s %s (roughness %g) at %g degrees: the sampled directions do not follow the pdf (p = %.2g)",
-          isa, kind_names[b.kind], (double)b.roughness, theta, p);
+    CHECK(p > 1e-3, "%s %s (roughness %g%s) at %g degrees: the sampled directions do not follow the pdf (p = %.2g)",
+          isa, kind_names[b.kind], (double)b.roughness, ior, theta, p);
 }
 
 static void test_chi_square(const char *isa, sample_fn sample, batch *bt, harness_rng *r)
@@ -371,18 +464,84 @@ static void test_chi_square(const char *isa, sample_fn sample, batch *bt, harnes
                    (lanes_bsdf){.kind = LANES_BSDF_CONDUCTOR, .f0 = {0.9f, 0.6f, 0.3f}, .roughness = 0.8f}, thetas[a]);
         chi_square(isa, sample, bt, r,
                    (lanes_bsdf){.kind = LANES_BSDF_PLASTIC, .albedo = {0.2f, 0.5f, 0.8f}, .roughness = 0.5f}, thetas[a]);
+        /* rough glass from outside and inside, and less dense inside (from
+         * outside at 75 degrees beyond the critical angle of the mean surface) */
+        const lanes_bsdf glass = {.kind = LANES_BSDF_ROUGH_GLASS, .albedo = {0.9f, 0.8f, 0.7f}, .roughness = 0.5f,
+                                  .ior = 1.5f};
+        chi_square(isa, sample, bt, r, glass, thetas[a]);
+        chi_square(isa, sample, bt, r, glass, 180.0 - thetas[a]);
+        chi_square(isa, sample, bt, r,
+                   (lanes_bsdf){.kind = LANES_BSDF_ROUGH_GLASS, .albedo = {1, 1, 1}, .roughness = 0.8f, .ior = 0.75f},
+                   thetas[a]);
     }
+}
+
+/* Rough glass where nothing scatters or no microfacet explains the pair:
+ * f = pdf = 0, never NaN, and likewise the transmission of an
+ * index-matched surface (|ior - 1| < LANES_BSDF_MIN_IOR_GAP: a delta,
+ * straight through, which the lobe does not hold); sampled from a
+ * direction in the plane, or at ior 1 (where F = 0 too, so nothing
+ * reflects), no valid direction and every weight and pdf 0. */
+static void test_degenerate(const char *isa, eval_fn eval, sample_fn sample, batch *bt)
+{
+    static const struct {
+        double wo[3], wi[3];
+        bool zero; /* at ior 1.5 */
+    } cases[] = {
+        {{1, 0, 0}, {0, 0, 1}, true},            /* wo in the plane */
+        {{0, 0, 1}, {1, 0, 0}, true},            /* wi in the plane */
+        {{0, 0, -1}, {-1, 0, 0}, true},          /* from inside */
+        {{1, 0, 0}, {-1, 0, 0}, true},           /* both, opposed: no half vector */
+        {{0, 0, -0.0}, {0, 0, 1}, true},         /* wo.z = -0 */
+        {{0.6, 0, 0.8}, {0.6, 0, -0.8}, true},   /* wo behind the only microfacet */
+        {{0.6, 0, 0.8}, {-0.6, 0, -0.8}, false}, /* straight through (a tilted facet); at ior 1 no h */
+        {{0, 0, 1}, {0, 0, -1}, false},          /* likewise */
+        {{0, 0, 1}, {0, 0, 1}, false},           /* D's peak */
+        {{0, 0, -1}, {0, 0, -1}, false},         /* D's peak, from inside */
+    };
+    enum { C = sizeof cases / sizeof cases[0] };
+    static const float iors[] = {1.5f, 1.0f, 1.00005f}, roughness[] = {0.0f, 0.5f};
+    for (size_t q = 0; q < 3; q++)
+        for (size_t g = 0; g < 2; g++) {
+            lanes_bsdf b = {.kind = LANES_BSDF_ROUGH_GLASS, .albedo = {1, 1, 1}, .roughness = roughness[g],
+                            .ior = iors[q]};
+            for (size_t i = 0; i < N; i++) put(bt->wo, i, cases[i % C].wo), put(bt->wi, i, cases[i % C].wi);
+            eval(&b, N, NULL, bt->wo, bt->wi, bt->f, bt->pdf);
+            bool matched = fabs(b.ior - 1.0) < LANES_BSDF_MIN_IOR_GAP;
+            for (size_t j = 0; j < N; j++) {
+                size_t i = j % C;
+                bool zero = cases[i].zero || b.ior == 1.0f || (matched && cases[i].wo[2] * cases[i].wi[2] < 0.0);
+                float f = bt->f[j], pdf = bt->pdf[j];
+                bool finite = isfinite(pdf) && isfinite(f) && isfinite(bt->f[N + j]) && isfinite(bt->f[2 * N + j]);
+                CHECK(finite && (zero ? pdf == 0.0f && f == 0.0f : pdf > 0.0f && f > 0.0f),
+                      "%s rough_glass (roughness %g, ior %g): f(wo (%g %g %g), wi (%g %g %g)) = %g, pdf %g", isa,
+                      (double)b.roughness, (double)b.ior, cases[i].wo[0], cases[i].wo[1], cases[i].wo[2],
+                      cases[i].wi[0], cases[i].wi[1], cases[i].wi[2], (double)f, (double)pdf);
+            }
+            static const double wos[][3] = {{1, 0, 0}, {0, -1, 0}, {0.6, 0, 0.8}, {0, 0.8, -0.6}};
+            for (size_t w = 0; w < 4; w++) {
+                if (w >= 2 && b.ior != 1.0f) continue;
+                harness_rng r = harness_rng_seed(0xde9 + w);
+                sample_batch(sample, bt, &b, wos[w], &r);
+                size_t bad = 0;
+                for (size_t i = 0; i < N; i++)
+                    bad += (bt->flags[i] & LANES_BSDF_VALID) || bt->pdf[i] != 0.0f || bt->weight[i] != 0.0f ||
+                           bt->weight[N + i] != 0.0f || bt->weight[2 * N + i] != 0.0f;
+                CHECK(bad == 0, "%s rough_glass (roughness %g, ior %g) from (%g %g %g): %zu samples valid or not 0",
+                      isa, (double)b.roughness, (double)b.ior, wos[w][0], wos[w][1], wos[w][2], bad);
+            }
+        }
 }
 
 /* Calls on n items that fill no whole vector at the end: each item as in
  * a full call, nothing written past n; and with an albedo per item (a
  * texture's), each item as the material with that albedo. */
-static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r)
+static void test_tail(const char *isa, const lanes_kernels *k, harness_rng *r, lanes_bsdf_kind kind)
 {
     enum { M = 37, GUARD = 16 };
     static float wo[3 * M], wi[3 * M], u[3 * M], f[3 * M + GUARD], pdf[M + GUARD], w2[3 * M + GUARD];
     static uint8_t flags[M + GUARD];
-    lanes_bsdf b = random_bsdf(r, LANES_BSDF_PLASTIC);
+    lanes_bsdf b = random_bsdf(r, kind);
     for (size_t i = 0; i < M; i++) {
         double d[3];
         random_direction(r, d);
@@ -454,7 +613,9 @@ int main(int argc, char **argv)
         test_eval(name, k->bsdf_eval, bt, &r);
         test_sampling(name, k->bsdf_sample, bt, &r);
         test_chi_square(name, k->bsdf_sample, bt, &r);
-        test_tail(name, k, &r);
+        test_tail(name, k, &r, LANES_BSDF_PLASTIC);
+        test_tail(name, k, &r, LANES_BSDF_ROUGH_GLASS);
+        test_degenerate(name, k->bsdf_eval, k->bsdf_sample, bt);
     }
     free(bt);
     return harness_summary("test_bsdf");
