@@ -97,8 +97,13 @@ static const char *material_problem(const lanes_material *m)
     if (!reflectance_ok(m->color)) return "a color outside [0, 1]";
     if (!color_ok(m->emission)) return "a negative or non-finite emission";
     if (m->kind == LANES_MAT_GLASS && !(isfinite(m->ior) && m->ior > 0.0f)) return "an ior that is not above 0";
-    if ((m->kind == LANES_MAT_CONDUCTOR || m->kind == LANES_MAT_PLASTIC) && !(m->roughness >= 0.0f && m->roughness <= 1.0f))
+    if ((m->kind == LANES_MAT_CONDUCTOR || m->kind == LANES_MAT_PLASTIC || m->kind == LANES_MAT_GLASS) &&
+        !(m->roughness >= 0.0f && m->roughness <= 1.0f))
         return "a roughness outside [0, 1]";
+    /* rough glass cannot refract through an index-matched surface: the
+     * transmission is a spike float cannot sample (trace/bsdf.h) */
+    if (m->kind == LANES_MAT_GLASS && m->roughness > 0.0f && fabsf(m->ior - 1.0f) < LANES_MAT_MIN_IOR_GAP)
+        return "a rough glass with an ior within 1e-4 of 1 (give it roughness 0)";
     if (m->kind == LANES_MAT_CONDUCTOR && !reflectance_ok(m->f0)) return "an f0 outside [0, 1]";
     if ((int)m->texture < LANES_MAT_TEXTURE_NONE || (int)m->texture > LANES_MAT_TEXTURE_WOOD)
         return "an unknown texture";

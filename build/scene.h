@@ -20,7 +20,7 @@
 typedef enum lanes_material_kind {
     LANES_MAT_DIFFUSE = 0,  /* Lambertian, color = albedo, optional emission */
     LANES_MAT_MIRROR,       /* perfect specular reflection, color = reflectance */
-    LANES_MAT_GLASS,        /* refraction with index ior, plus Fresnel reflection */
+    LANES_MAT_GLASS,        /* refraction with index ior, plus Fresnel reflection; rough with a roughness */
     LANES_MAT_EMISSIVE,     /* emits `emission`, reflects nothing */
     LANES_MAT_CONDUCTOR,    /* GGX metal of roughness, Fresnel from f0 (color = f0) */
     LANES_MAT_PLASTIC       /* color under a GGX dielectric coat of roughness */
@@ -44,12 +44,15 @@ typedef struct lanes_material {
     float color[3];     /* reflectance in [0, 1]; a texture's mean color with one */
     float ior;          /* glass only */
     float emission[3];  /* emissive, and optional on diffuse */
-    float roughness;    /* conductor, plastic: in [0, 1] */
+    float roughness;    /* conductor, plastic, glass (0: smooth): in [0, 1] */
     float f0[3];        /* conductor: reflectance at normal incidence, in [0, 1] */
     lanes_material_texture texture;
     float texture_scale;        /* > 0, the pattern's size in scene units */
     float texture_colors[2][3]; /* the blend's ends, in [0, 1] */
 } lanes_material;
+
+/* A rough glass's ior keeps this far from 1 (LANES_BSDF_MIN_IOR_GAP). */
+#define LANES_MAT_MIN_IOR_GAP 1e-4f
 
 /* The most materials a scene may have: the path tracer's stream sort counts
  * them in 16 bits. */

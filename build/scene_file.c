@@ -506,7 +506,7 @@ typedef struct {
 
 static const char *const k_diffuse[] = {"type", "color", "texture", "emission", NULL};
 static const char *const k_mirror[] = {"type", "color", NULL};
-static const char *const k_glass[] = {"type", "color", "ior", NULL};
+static const char *const k_glass[] = {"type", "color", "ior", "roughness", NULL};
 static const char *const k_emissive[] = {"type", "emission", NULL};
 static const char *const k_conductor[] = {"type", "f0", "roughness", NULL};
 static const char *const k_plastic[] = {"type", "color", "texture", "roughness", NULL};
@@ -579,7 +579,7 @@ static bool parse_material(ctx *c, const cJSON *m)
     snprintf(mat.name, sizeof mat.name, "%s", name);
     mat.kind = mt->kind;
     mat.ior = 1.5f;
-    mat.roughness = 0.3f;
+    mat.roughness = mt->kind == LANES_MAT_GLASS ? 0.0f : 0.3f;
     for (int k = 0; k < 3; k++) mat.color[k] = mat.f0[k] = mt->grey;
     for (const cJSON *e = m->child; ok && e; e = e->next) {
         push_key(c, e->string);

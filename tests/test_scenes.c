@@ -904,7 +904,7 @@ static void test_scene_files(void)
         long water = lanes_scene_find_material(&s, "water"),
              grey = lanes_scene_find_material(&s, "grey");
         CHECK(water == 3 && s.materials[3].kind == LANES_MAT_GLASS &&
-                  fabsf(s.materials[3].ior - 1.33f) < 1e-6f,
+                  fabsf(s.materials[3].ior - 1.33f) < 1e-6f && s.materials[3].roughness == 0.0f,
               "glass material");
         CHECK(grey == 1 && s.materials[1].color[2] == 0.5f, "grey from one number");
         CHECK(s.materials[2].kind == LANES_MAT_MIRROR && s.materials[2].color[0] == 1.0f,
@@ -958,6 +958,8 @@ static void test_scene_files(void)
         CHECK(noise->kind == LANES_MAT_PLASTIC && noise->texture == LANES_MAT_TEXTURE_NOISE && noise->texture_scale == 1.0f,
               "textured plastic, default scale");
         CHECK(wood->texture == LANES_MAT_TEXTURE_WOOD, "wood");
+        const lanes_material *frosted = &s.materials[lanes_scene_find_material(&s, "frosted")];
+        CHECK(frosted->kind == LANES_MAT_GLASS && frosted->roughness == 0.4f && frosted->ior == 1.5f, "rough glass");
         lanes_scene_free(&s);
     }
     /* The library refuses what a file could not give: bad values, and a
@@ -1201,6 +1203,7 @@ static const bad_case bad_scenes[] = {
     {"scenes/bad/texture_one_color.json", {"line 3", "texture.colors", "two colors"}},
     {"scenes/bad/texture_bright.json", {"line 3", "texture.colors[1]", "reflectance"}},
     {"scenes/bad/negative_emission.json", {"line 3", "materials.m.emission", ">= 0"}},
+    {"scenes/bad/rough_glass_ior_one.json", {"line 3", "materials.m", "within 1e-4 of 1"}},
     {"scenes/bad/no_such_scene.json", {"no such file"}},
     {"!deep.json", {"syntax error"}},
 };

@@ -91,7 +91,7 @@ static lanes_bsdf bsdf_of(const lanes_material *m)
     memset(&b, 0, sizeof b);
     switch (m->kind) {
     case LANES_MAT_MIRROR: b.kind = LANES_BSDF_MIRROR; break;
-    case LANES_MAT_GLASS: b.kind = LANES_BSDF_GLASS; break;
+    case LANES_MAT_GLASS: b.kind = m->roughness > 0.0f ? LANES_BSDF_ROUGH_GLASS : LANES_BSDF_GLASS; break;
     case LANES_MAT_CONDUCTOR: b.kind = LANES_BSDF_CONDUCTOR; break;
     case LANES_MAT_PLASTIC: b.kind = LANES_BSDF_PLASTIC; break;
     default: b.kind = LANES_BSDF_LAMBERT; break; /* an emitter is never shaded */
