@@ -9,7 +9,10 @@
  * rays do sample: those count on camera rays and after delta bounces
  * (mirror, glass) only, and on their emitting side only. A diffuse
  * material's `emission`, when set, counts at every hit. Misses see the
- * background: the scene's sky, or a uniform color.
+ * background: the scene's sky, or a uniform color. Every material kind of
+ * build/scene.h shades with its own BSDF (a rough glass as
+ * LANES_BSDF_ROUGH_GLASS); a textured material's albedo is its texture's
+ * color at each hit point, evaluated by the set's texture kernel.
  *
  * Random numbers are a function of (pixel, sample, depth, dimension)
  * (simd/vrandom.h's hash), so a path's samples do not depend on the order
