@@ -79,9 +79,6 @@ float lanes_scene_epsilon(const lanes_scene *scene)
     return (float)(1e-5 * sqrt(diag2));
 }
 
-/* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
- * geometric so repeated appends stay linear overall; every size is checked
- * against SIZE_MAX before multiplying. */
 static bool color_ok(const float c[3])
 {
     return finite3(c) && c[0] >= 0.0f && c[1] >= 0.0f && c[2] >= 0.0f;
@@ -116,6 +113,9 @@ static const char *material_problem(const lanes_material *m)
     return NULL;
 }
 
+/* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
+ * geometric so repeated appends stay linear overall; every size is checked
+ * against SIZE_MAX before multiplying. */
 static bool grow(void **array, size_t *cap, size_t need, size_t size)
 {
     if (need <= *cap)
