@@ -3,7 +3,8 @@
  * diffuse; and the default scene with 100 clustered materials), at every
  * set this CPU runs:
  *   - packet and stream give the radiance of single-1lane bit for bit per
- *     pixel, the same rays per depth, and finish every path they begin;
+ *     pixel, the same rays per depth, and finish every path they begin
+ *     (the stream's books balance after every stage);
  *   - each set's image agrees with the scalar set's single method (scalar
  *     shading; FMA and wider BVHs round differently, and a rare path takes
  *     another branch): the image mean within 4 standard errors, and per
@@ -66,6 +67,8 @@ static void exact(const char *scene, const lanes_scene *s, lanes_isa isa)
               "%s %s: %s and single-1lane trace different rays", scene, lanes_isa_name(isa), name);
         CHECK(r.paths == one.paths && r.paths_finished == r.paths, "%s %s %s: %llu paths begun, %llu finished", scene,
               lanes_isa_name(isa), name, (unsigned long long)r.paths, (unsigned long long)r.paths_finished);
+        CHECK(r.accounting_errors == 0, "%s %s %s: after %llu stages the paths made were not the finished plus those in flight",
+              scene, lanes_isa_name(isa), name, (unsigned long long)r.accounting_errors);
         lanes_paths_result_free(&r);
     }
     lanes_paths_result_free(&one);

@@ -77,7 +77,7 @@ typedef struct {
 typedef struct stream_state stream_state;
 
 typedef struct {
-    uint64_t paths, finished, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
+    uint64_t paths, finished, accounting_errors, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
     uint64_t shade_calls, shade_slots, shade_live;
     double stage_seconds[LANES_PATHS_STAGE_COUNT];
     stream_state *stream; /* the worker's streams (stream method) */
@@ -693,7 +693,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
     const int w = job->shade_k->lanes;
     double *stage = c->stage_seconds;
     packet_soa q;
-    int next = 0, total = count * (s1 - s0), live = 0, nfree = st->size;
+    int next = 0, total = count * (s1 - s0), live = 0, nfree = st->size, finished = 0;
     for (int i = 0; i < st->size; i++) st->free_slots[i] = (uint32_t)(st->size - 1 - i), st->path[i].alive = false;
     while (next < total || live > 0) {
         /* generate: camera rays into the free slots, pixel by pixel within a sample */
@@ -722,6 +722,8 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             lanes_ray_prepare_rcp(&st->rays[nr], job->rcp);
             st->ray_slot[nr++] = (uint32_t)i;
         }
+        /* the books: every path made is finished or in flight, one slot each */
+        if (nr != live || next != finished + live || nfree + live != st->size) c->accounting_errors++;
         t = stage_clock(&stage[LANES_PATHS_STAGE_GENERATE], t);
         trace_rays(job, st->rays, (size_t)nr, st->hits);
         t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
@@ -842,8 +844,10 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
             st->radiance[(l->sample - (uint32_t)s0) * (uint32_t)count + l->tile_index] = l->sum;
             st->free_slots[nfree++] = slot;
             live--;
+            finished++;
             c->finished++;
         }
+        if (next != finished + live || nfree + live != st->size) c->accounting_errors++;
         stage_clock(&stage[LANES_PATHS_STAGE_ACCUMULATE], t);
     }
 }
@@ -1013,6 +1017,7 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
     for (int i = 0; i < threads; i++) {
         out->paths += counts[i].paths;
         out->paths_finished += counts[i].finished;
+        out->accounting_errors += counts[i].accounting_errors;
         out->shadow_rays += counts[i].shadow;
         out->shade_calls += counts[i].shade_calls;
         out->shade_slots += counts[i].shade_slots;

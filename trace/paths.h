@@ -114,6 +114,10 @@ typedef struct lanes_paths_result {
     double seconds;
     uint64_t paths;          /* paths begun (camera rays) */
     uint64_t paths_finished; /* paths whose radiance reached the image: equal to paths, none lost or doubled */
+    /* stream method: the stages after which the paths made were not the
+     * finished plus those in flight, one slot each (0: none lost or
+     * doubled on the way) */
+    uint64_t accounting_errors;
     uint64_t rays_by_depth[LANES_PATHS_MAX_DEPTH + 1]; /* [0]: camera rays, [d]: extension rays of bounce d */
     uint64_t shadow_rays;
     /* Shading: kernel calls, the lane slots they offered and the lanes that
