@@ -11,11 +11,14 @@
  *   harness_summary(name)   "name: 12 checks, 0 failed" (and skipped); the
  *                           exit status for main: 1 when anything failed.
  *   harness_rng             splitmix64: the same numbers on every machine.
- *   harness_in_list(l, n)   n is in the comma-separated list l (NULL: all).
+ *   harness_in_list(l, n)   n is in the comma-separated list l (NULL: all;
+ *                           name_list.h).
  *
  * One translation unit per test program: the counters are static. */
 #ifndef LANES_TESTS_HARNESS_H
 #define LANES_TESTS_HARNESS_H
+
+#include "name_list.h"
 
 #include <stdarg.h>
 #include <stdbool.h>
@@ -108,20 +111,5 @@ static inline double harness_uniform(harness_rng *r)
     return (double)(harness_next(r) >> 11) * 0x1p-53;
 }
 
-/* Whether name is in a comma-separated list (NULL: every name), for a
- * test's --isa a,b,... option. */
-static inline bool harness_in_list(const char *list, const char *name)
-{
-    if (!list) return true;
-    size_t len = strlen(name);
-    for (const char *p = list; *p;) {
-        const char *e = strchr(p, ',');
-        size_t l = e ? (size_t)(e - p) : strlen(p);
-        if (l == len && strncmp(p, name, len) == 0) return true;
-        if (!e) break;
-        p = e + 1;
-    }
-    return false;
-}
 
 #endif

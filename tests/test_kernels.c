@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "name_list.h"
 #include "test_kernels_common.h"
 
 /* ---- check groups ---- */
@@ -473,19 +474,6 @@ void tk_family_prepare(tk_ctx *c, int arg)
 
 /* ---- driver ---- */
 
-static bool in_list(const char *list, const char *name)
-{
-    if (!list) return true;
-    size_t len = strlen(name);
-    for (const char *p = list; *p;) {
-        const char *e = strchr(p, ',');
-        size_t l = e ? (size_t)(e - p) : strlen(p);
-        if (l == len && strncmp(p, name, len) == 0) return true;
-        if (!e) break;
-        p = e + 1;
-    }
-    return false;
-}
 
 static double now(void)
 {
@@ -588,7 +576,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
         const char *name = lanes_isa_name(isa);
-        if (!in_list(isa_list, name)) {
+        if (!harness_in_list(isa_list, name)) {
             snprintf(reasons[i], sizeof reasons[i], "not selected by --isa");
         } else if (!lanes_isa_compiled(isa)) {
             snprintf(reasons[i], sizeof reasons[i], "not compiled into this build (LANES_ISAS)");
@@ -606,7 +594,7 @@ int main(int argc, char **argv)
 
     double t_start = now();
     for (int f = 0; f < n_families; f++) {
-        if (!in_list(family_list, families[f])) continue;
+        if (!harness_in_list(family_list, families[f])) continue;
         printf("== family %s\n", families[f]);
         for (int i = 0; i < LANES_ISA_COUNT; i++)
             if (skip_reason[i]) tk_skip(&c, "%s: %s (family %s)", lanes_isa_name((lanes_isa)i),

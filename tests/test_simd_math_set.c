@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "simd/counter_random.h"
 #include "simd/isa.h"
 #include "simd/simd.h"
 #include "simd/vmath.h"
@@ -179,18 +180,9 @@ static void test_specials(simd_ctx *c)
 
 /* ---- random numbers ---------------------------------------------------- */
 
-static uint32_t hash32(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
 static uint32_t random_bits(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dimension)
 {
-    return hash32(hash32(hash32(hash32(pixel) + sample) + depth) + dimension);
+    return lanes_hash32(lanes_hash32(lanes_hash32(lanes_hash32(pixel) + sample) + depth) + dimension);
 }
 
 static void test_random(simd_ctx *c, rng *r)

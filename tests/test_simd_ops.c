@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "simd/isa.h"
+#include "name_list.h"
 #include "test_simd_ops.h"
 
 void simd_begin(simd_ctx *c, const char *op)
@@ -59,19 +60,6 @@ static const run_fn runs[LANES_ISA_COUNT] = {
 #undef ENTRY
 };
 
-static bool in_list(const char *list, const char *name)
-{
-    if (!list) return true;
-    size_t len = strlen(name);
-    for (const char *p = list; *p;) {
-        const char *e = strchr(p, ',');
-        size_t l = e ? (size_t)(e - p) : strlen(p);
-        if (l == len && strncmp(p, name, len) == 0) return true;
-        if (!e) break;
-        p = e + 1;
-    }
-    return false;
-}
 
 int main(int argc, char **argv)
 {
@@ -111,7 +99,7 @@ int main(int argc, char **argv)
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
         const char *name = lanes_isa_name(isa);
-        if (!in_list(isa_list, name)) {
+        if (!harness_in_list(isa_list, name)) {
             printf("SKIP %s: not selected by --isa\n", name);
             c.skipped++;
         } else if (!runs[i] || !lanes_isa_compiled(isa)) {

@@ -4,22 +4,15 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "simd/counter_random.h"
+
 #define REF_PI 3.14159265358979323846
 #define NOISE_SCALE 0.75 /* LANES_NOISE_SCALE */
 
-static uint32_t hash32(uint32_t x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
 
 static double ramp(int32_t ix, int32_t iy, int32_t iz, double dx, double dy, double dz)
 {
-    uint32_t h = hash32(hash32(hash32((uint32_t)ix) + (uint32_t)iy) + (uint32_t)iz);
+    uint32_t h = lanes_hash32(lanes_hash32(lanes_hash32((uint32_t)ix) + (uint32_t)iy) + (uint32_t)iz);
     return ((h & 1u) ? -dx : dx) + ((h & 2u) ? -dy : dy) + ((h & 4u) ? -dz : dz);
 }
 

@@ -105,11 +105,12 @@ static lanes_bsdf bsdf_of(const lanes_material *m)
 
 static lanes_texture texture_of(const lanes_material *m)
 {
-    static const lanes_texture_kind kinds[] = {LANES_TEXTURE_CHECKER, LANES_TEXTURE_CHECKER, LANES_TEXTURE_NOISE,
-                                               LANES_TEXTURE_MARBLE, LANES_TEXTURE_WOOD};
+    /* the material's texture, not NONE: the four in the same order */
+    static const lanes_texture_kind kinds[] = {LANES_TEXTURE_CHECKER, LANES_TEXTURE_NOISE, LANES_TEXTURE_MARBLE,
+                                               LANES_TEXTURE_WOOD};
     lanes_texture t;
     memset(&t, 0, sizeof t);
-    t.kind = kinds[m->texture];
+    t.kind = kinds[m->texture - LANES_MAT_TEXTURE_CHECKER];
     t.scale = m->texture_scale;
     memcpy(t.color_a, m->texture_colors[0], sizeof t.color_a);
     memcpy(t.color_b, m->texture_colors[1], sizeof t.color_b);
