@@ -130,6 +130,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) rays += r.rays_by_depth[d];
     double mrays = r.seconds > 0.0 ? (double)rays / r.seconds * 1e-6 : 0.0;
     double utilization = r.shade_slots ? (double)r.shade_live / (double)r.shade_slots : 0.0;
+    double sampling = r.sample_slots ? (double)r.sample_live / (double)r.sample_slots : 0.0;
     int threads = lanes_parallel_threads(o.threads);
     static const char *const stages[LANES_PATHS_STAGE_COUNT] = {"generate", "intersect", "sort",
                                                                "shade",    "shadow",    "accumulate"};
@@ -137,7 +138,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         fprintf(csv, "cpu,scene,method,intersector,isa,lanes,threads,stream,stream_bytes,materials,spp,depth,paths,rays,"
                      "seconds,mrays,shading_utilization");
         for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) fprintf(csv, ",%s_seconds", stages[i]);
-        fprintf(csv, "\n");
+        fprintf(csv, ",sampling_utilization\n");
         cli_csv_field(csv, lanes_cpu()->brand);
         fputc(',', csv);
         cli_csv_field(csv, scene.name);
@@ -146,7 +147,7 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
                 r.stream_bytes, scene.material_count, o.spp, o.depth, (unsigned long long)r.paths, (unsigned long long)rays,
                 r.seconds, mrays, utilization);
         for (int i = 0; i < LANES_PATHS_STAGE_COUNT; i++) fprintf(csv, ",%.6f", r.stage_seconds[i]);
-        fprintf(csv, "\n");
+        fprintf(csv, ",%.4f\n", sampling);
         cli_finish_file("paths: --csv", csv_path, csv);
     }
     if (json) {
@@ -167,6 +168,8 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         cli_json_number(stdout, mrays);
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, utilization);
+        printf(", \"sampling_utilization\": ");
+        cli_json_number(stdout, sampling);
         printf(", \"intersector\": \"%s\"", engine ? "embree" : "lanes");
         if (o.method == LANES_PATHS_STREAM) printf(", \"stream\": %d, \"stream_bytes\": %zu", o.stream, r.stream_bytes);
         if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET) {
@@ -188,9 +191,10 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
         if (engine)
             printf("intersector: Embree %s (rtcIntersect1M, rtcOccluded1M; one ray: rtcIntersect1, rtcOccluded1), shading by %s\n",
                    engine, k->name);
-        printf("rays: %llu (%llu camera, %llu shadow); %.3f s; %.2f Mrays/s; shading utilisation %.3f\n",
+        printf("rays: %llu (%llu camera, %llu shadow); %.3f s; %.2f Mrays/s; shading utilisation %.3f (the BSDF "
+               "sampling calls alone %.3f)\n",
                (unsigned long long)rays, (unsigned long long)r.rays_by_depth[0], (unsigned long long)r.shadow_rays,
-               r.seconds, mrays, utilization);
+               r.seconds, mrays, utilization, sampling);
         if (o.method == LANES_PATHS_STREAM)
             printf("stream of %d paths per thread (%.0f KB)\n", o.stream, (double)r.stream_bytes / 1024.0);
         if (o.method == LANES_PATHS_STREAM || o.method == LANES_PATHS_PACKET)

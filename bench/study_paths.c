@@ -38,7 +38,7 @@ typedef struct {
     lanes_isa isa;
     int lanes, materials, stream, spp;
     bool embree; /* traced by Embree (lanes paths --intersector embree) */
-    double mrays[64], utilization, shading_seconds[64], intersect_seconds[64], shadow_seconds[64];
+    double mrays[64], utilization, sampling_utilization, shading_seconds[64], intersect_seconds[64], shadow_seconds[64];
 } paths_row;
 
 typedef struct {
@@ -132,6 +132,7 @@ static void measure(paths_row *r, study_scene *s, const paths_study_options *o, 
     for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) rays += res.rays_by_depth[d];
     r->mrays[round] = res.seconds > 0.0 ? (double)rays / res.seconds * 1e-6 : 0.0;
     r->utilization = res.shade_slots ? (double)res.shade_live / (double)res.shade_slots : 0.0;
+    r->sampling_utilization = res.sample_slots ? (double)res.sample_live / (double)res.sample_slots : 0.0;
     r->shading_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_SHADE];
     r->intersect_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_INTERSECT];
     r->shadow_seconds[round] = res.stage_seconds[LANES_PATHS_STAGE_SHADOW];
@@ -151,13 +152,13 @@ static void write_csv(const char *path, const paths_rows *rows, int reps)
 {
     FILE *f = cli_create_file("study --paths", path);
     fprintf(f, "scene,experiment,method,intersector,isa,lanes,materials,stream,spp,mrays,shading_utilization,shading_seconds,"
-               "intersect_seconds,shadow_seconds\n");
+               "intersect_seconds,shadow_seconds,sampling_utilization\n");
     for (size_t i = 0; i < rows->count; i++) {
         const paths_row *r = &rows->rows[i];
-        fprintf(f, "%s,%s,%s,%s,%s,%d,%d,%d,%d,%.4f,%.4f,%.5f,%.5f,%.5f\n", r->scene, r->experiment,
+        fprintf(f, "%s,%s,%s,%s,%s,%d,%d,%d,%d,%.4f,%.4f,%.5f,%.5f,%.5f,%.4f\n", r->scene, r->experiment,
                 lanes_paths_method_name(r->method), r->embree ? "embree" : "lanes", lanes_isa_name(r->isa), r->lanes,
                 r->materials, r->stream, r->spp, median(r->mrays, reps), r->utilization, median(r->shading_seconds, reps),
-                median(r->intersect_seconds, reps), median(r->shadow_seconds, reps));
+                median(r->intersect_seconds, reps), median(r->shadow_seconds, reps), r->sampling_utilization);
     }
     cli_finish_file("study --paths", path, f);
 }
@@ -180,6 +181,8 @@ static void write_json(const paths_rows *rows, int reps, const char *dir)
         cli_json_number(stdout, median(r->mrays, reps));
         printf(", \"shading_utilization\": ");
         cli_json_number(stdout, r->utilization);
+        printf(", \"sampling_utilization\": ");
+        cli_json_number(stdout, r->sampling_utilization);
         printf(", \"shading_seconds\": ");
         cli_json_number(stdout, median(r->shading_seconds, reps));
         printf(", \"stage_seconds\": {\"intersect\": ");
@@ -245,8 +248,8 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
             fprintf(f, "\n");
         }
         fprintf(f, "\n## %s: the paper's comparison, 36 and 111 clustered materials (stream 2048)\n\n", scenes[s]);
-        fprintf(f, "| set | materials | method | Mrays/s | vs packet | vs single | shading utilisation | shading s | "
-                   "packet's shading s / this |\n|---|---|---|---|---|---|---|---|---|\n");
+        fprintf(f, "| set | materials | method | Mrays/s | vs packet | vs single | shading utilisation | sampling calls' | shading s | "
+                   "packet's shading s / this |\n|---|---|---|---|---|---|---|---|---|---|\n");
         for (int j = 0; j < nsets; j++)
             for (int k = 0; k < 2; k++) {
                 const paths_row *single = find(rows, scenes[s], "clustered", LANES_PATHS_SINGLE, sets[j], paper_materials[k], -1);
@@ -257,9 +260,9 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
                     double mr = median(r->mrays, o->reps), sh = median(r->shading_seconds, o->reps);
                     double mp = packet ? median(packet->mrays, o->reps) : 0.0, ms = single ? median(single->mrays, o->reps) : 0.0;
                     double sp = packet ? median(packet->shading_seconds, o->reps) : 0.0;
-                    fprintf(f, "| %s | %d | %s | %.2f | %.2f | %.2f | %.3f |", lanes_isa_name(sets[j]), paper_materials[k],
-                            lanes_paths_method_name(r->method), mr, mp > 0.0 ? mr / mp : 0.0, ms > 0.0 ? mr / ms : 0.0,
-                            r->utilization);
+                    fprintf(f, "| %s | %d | %s | %.2f | %.2f | %.2f | %.3f | %.3f |", lanes_isa_name(sets[j]),
+                            paper_materials[k], lanes_paths_method_name(r->method), mr, mp > 0.0 ? mr / mp : 0.0,
+                            ms > 0.0 ? mr / ms : 0.0, r->utilization, r->sampling_utilization);
                     if (m == LANES_PATHS_SINGLE) fprintf(f, " - | - |\n");
                     else fprintf(f, " %.3f | %.2f |\n", sh, sh > 0.0 ? sp / sh : 0.0);
                 }

@@ -14,10 +14,16 @@
  *     99% of pixel channels within 1e-4 relative of scalar shading's (a
  *     1% bias in one BSDF hides in the noise of the first test, not in
  *     this one);
+ *   - the sampling calls' utilisation counters equal a recount from the
+ *     materials of the hits each trace call returned (an intersector
+ *     around the set's traversal): per call, a stream shades each
+ *     material's n_m rays in ceil(n_m / W) calls, a packet each material
+ *     present in one; live lanes sum(n_m) of the slots W * calls;
  *   - packet shading utilisation on the 100-material scene falls as the
  *     width grows, 4 > 8 > 16 lanes (printed).
  * Usage: test_paths_sets DATA_DIR */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,7 +36,8 @@
 
 enum { SIZE = 64, SPP_EXACT = 2, SPP_STATS = 16 };
 
-static bool render(const lanes_scene *s, lanes_isa isa, lanes_paths_method method, int spp, lanes_paths_result *out)
+static bool render_with(const lanes_scene *s, lanes_isa isa, lanes_paths_method method, int spp,
+                        const lanes_paths_intersector *x, lanes_paths_result *out)
 {
     lanes_render_accel accel;
     lanes_error err;
@@ -42,9 +49,16 @@ static bool render(const lanes_scene *s, lanes_isa isa, lanes_paths_method metho
     o.isa = isa, o.method = method, o.spp = spp, o.threads = 2;
     o.width = o.height = SIZE;
     o.stream = 256; /* the smallest: a tile's slots refilled many times */
+    o.accuracy = LANES_ACCURACY_DEFAULT;
+    o.intersector = x;
     lanes_status st = lanes_paths_render(s, &accel, &o, out, &err);
     lanes_render_accel_free(&accel);
     return CHECK(st == LANES_OK, "%s %s: %s", lanes_isa_name(isa), lanes_paths_method_name(method), err.message);
+}
+
+static bool render(const lanes_scene *s, lanes_isa isa, lanes_paths_method method, int spp, lanes_paths_result *out)
+{
+    return render_with(s, isa, method, spp, NULL, out);
 }
 
 static size_t image_bytes(const lanes_paths_result *r) { return (size_t)r->width * (size_t)r->height * 3 * sizeof(float); }
@@ -110,6 +124,76 @@ static void agrees(const char *scene, const lanes_paths_result *ref, const lanes
           lanes_isa_name(isa), apart, n);
 }
 
+/* The recount: the set's own traversal, then the shading calls the hits
+ * must have led to, from their materials alone. */
+typedef struct {
+    const lanes_scene *scene;
+    const lanes_render_accel *accel;
+    const lanes_kernels *k;
+    bool stream; /* else packet */
+    pthread_mutex_t lock;
+    uint64_t slots, live;
+    bool out_of_memory;
+} recount;
+
+static void recount_trace(void *ctx, const lanes_ray *rays, size_t n, lanes_hit *hits)
+{
+    recount *rc = ctx;
+    rc->k->trace_wide(&rc->accel->wide, LANES_ACCURACY_DEFAULT, rays, n, hits, NULL);
+    const lanes_scene *s = rc->scene;
+    uint32_t *per_material = calloc(s->material_count, sizeof *per_material);
+    uint64_t slots = 0, live = 0, w = (uint64_t)rc->k->lanes;
+    for (size_t i = 0; per_material && i < n; i++)
+        if (hits[i].prim != LANES_NO_HIT && s->materials[s->material_of[hits[i].prim]].kind != LANES_MAT_EMISSIVE)
+            per_material[s->material_of[hits[i].prim]]++;
+    for (size_t m = 0; per_material && m < s->material_count; m++) {
+        if (!per_material[m]) continue;
+        live += per_material[m];
+        slots += rc->stream ? w * ((per_material[m] + w - 1) / w) : w;
+    }
+    pthread_mutex_lock(&rc->lock);
+    rc->slots += slots, rc->live += live;
+    rc->out_of_memory = rc->out_of_memory || !per_material;
+    pthread_mutex_unlock(&rc->lock);
+    free(per_material);
+}
+
+static void recount_occluded(void *ctx, const lanes_ray *rays, size_t n, uint8_t *occluded)
+{
+    recount *rc = ctx;
+    rc->k->occluded_wide(&rc->accel->wide, LANES_ACCURACY_DEFAULT, rays, n, occluded, NULL);
+}
+
+static void utilisation_recounted(const char *scene, const lanes_scene *s, lanes_isa isa)
+{
+    lanes_render_accel accel;
+    lanes_error err;
+    if (!CHECK(lanes_render_accel_build(s, lanes_kernels_for(isa), false, 0, &accel, &err) == LANES_OK, "accel: %s",
+               err.message))
+        return;
+    for (int m = LANES_PATHS_PACKET; m <= LANES_PATHS_STREAM; m++) {
+        recount rc = {s, &accel, lanes_kernels_for(isa), m == LANES_PATHS_STREAM, PTHREAD_MUTEX_INITIALIZER, 0, 0, false};
+        lanes_paths_intersector x = {"recount", &rc, recount_trace, recount_occluded};
+        lanes_paths_result r;
+        const char *name = lanes_paths_method_name((lanes_paths_method)m);
+        if (render_with(s, isa, (lanes_paths_method)m, SPP_EXACT, &x, &r)) {
+            printf("  %s %s %s: sampling utilisation %.3f (%llu of %llu lanes), recount %.3f\n", scene,
+                   lanes_isa_name(isa), name, (double)r.sample_live / (double)r.sample_slots,
+                   (unsigned long long)r.sample_live, (unsigned long long)r.sample_slots,
+                   (double)rc.live / (double)rc.slots);
+            CHECK(!rc.out_of_memory && r.sample_live == rc.live && r.sample_slots == rc.slots && rc.slots > 0,
+                  "%s %s %s: sampling counted %llu live of %llu slots, the hits' materials give %llu of %llu", scene,
+                  lanes_isa_name(isa), name, (unsigned long long)r.sample_live, (unsigned long long)r.sample_slots,
+                  (unsigned long long)rc.live, (unsigned long long)rc.slots);
+            CHECK(r.shade_slots >= r.sample_slots && r.shade_live >= r.sample_live, "%s %s %s: sampling above the total",
+                  scene, lanes_isa_name(isa), name);
+            lanes_paths_result_free(&r);
+        }
+        pthread_mutex_destroy(&rc.lock);
+    }
+    lanes_render_accel_free(&accel);
+}
+
 /* The set of each width this CPU runs, best first. */
 static lanes_isa runs_with_lanes(int lanes)
 {
@@ -168,6 +252,7 @@ int main(int argc, char **argv)
             continue;
         }
         for (int k = 0; k < 2; k++) exact(names[k], &scenes[k], isa);
+        utilisation_recounted(names[1], &scenes[1], isa);
     }
     lanes_paths_result ref;
     if (render(&scenes[0], LANES_ISA_SCALAR, LANES_PATHS_SINGLE, SPP_STATS, &ref)) {

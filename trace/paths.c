@@ -79,9 +79,17 @@ typedef struct stream_state stream_state;
 typedef struct {
     uint64_t paths, finished, accounting_errors, shadow, by_depth[LANES_PATHS_MAX_DEPTH + 1];
     uint64_t shade_calls, shade_slots, shade_live;
+    uint64_t sample_calls, sample_slots, sample_live; /* the bsdf_sample calls among them */
     double stage_seconds[LANES_PATHS_STAGE_COUNT];
     stream_state *stream; /* the worker's streams (stream method) */
 } paths_counts;
+
+/* A shading kernel call of the set's width that carried live items. */
+static void count_shading(paths_counts *c, int width, int live, bool sampling)
+{
+    c->shade_calls++, c->shade_slots += (uint64_t)width, c->shade_live += (uint64_t)live;
+    if (sampling) c->sample_calls++, c->sample_slots += (uint64_t)width, c->sample_live += (uint64_t)live;
+}
 
 static float luminance(const float c[3]) { return (c[0] + c[1] + c[2]) / 3.0f; }
 
@@ -229,7 +237,7 @@ static vec3 bsdf_f(const paths_job *job, const lanes_bsdf *b, const float *albed
 {
     float o[3] = {wo.x, wo.y, wo.z}, i[3] = {wi.x, wi.y, wi.z}, f[3], pdf;
     job->shade_k->bsdf_eval(b, 1, albedo, o, i, f, &pdf);
-    c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
+    count_shading(c, job->shade_k->lanes, 1, false);
     return v3(f[0], f[1], f[2]);
 }
 
@@ -421,7 +429,7 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
         u3[1] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_2);
         u3[2] = lanes_random01(pixel, sample, (uint32_t)depth, DIM_BSDF_3);
         job->shade_k->bsdf_sample(b, 1, albedo, wo3, u3, wi3, w3, &pdf, &flags);
-        c->shade_calls++, c->shade_slots += (uint64_t)job->shade_k->lanes, c->shade_live++;
+        count_shading(c, job->shade_k->lanes, 1, true);
         if (!(flags & LANES_BSDF_VALID)) break;
         after_delta = (flags & LANES_BSDF_DELTA) != 0;
         if (!continue_path(job, &sf, &fr, wi3, w3, depth, pixel, sample, &beta, &o, &d)) break;
@@ -506,9 +514,18 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
     t = stage_clock(&stage[LANES_PATHS_STAGE_GENERATE], t);
     for (int depth = 0; depth < job->opt->depth; depth++) {
         bool any = false;
-        lanes_hit hits[LANES_MAX_W];
+        /* the live lanes' rays in one call, compact */
+        lanes_ray rays[LANES_MAX_W];
+        lanes_hit found[LANES_MAX_W], hits[LANES_MAX_W];
+        int nr = 0;
         for (int i = 0; i < n; i++)
-            if (L[i].alive) hits[i] = trace(job, L[i].o, L[i].d, INFINITY);
+            if (L[i].alive) {
+                rays[nr] = (lanes_ray){{L[i].o.x, L[i].o.y, L[i].o.z}, {L[i].d.x, L[i].d.y, L[i].d.z}, {0, 0, 0}, 0.0f, INFINITY};
+                lanes_ray_prepare_rcp(&rays[nr++], job->rcp);
+            }
+        trace_rays(job, rays, (size_t)nr, found);
+        for (int i = 0, k = 0; i < n; i++)
+            if (L[i].alive) hits[i] = found[k++];
         t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
         for (int i = 0; i < n; i++) {
             packet_lane *l = &L[i];
@@ -549,7 +566,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 }
                 if (lit) {
                     job->shade_k->bsdf_eval(b, (size_t)w, albedo, q.wo, q.wi, q.f, q.pdf);
-                    c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(lit);
+                    count_shading(c, w, __builtin_popcount(lit), false);
                     for (int i = 0; i < n; i++) {
                         vec3 f = v3(q.f[i], q.f[w + i], q.f[2 * w + i]);
                         if (!(lit >> i & 1u) || is_black(f)) continue;
@@ -567,7 +584,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                     q.u[k * w + i] = in ? lanes_random01(L[i].pixel, L[i].sample, (uint32_t)depth, DIM_BSDF_1 + (uint32_t)k) : 0.5f;
             }
             job->shade_k->bsdf_sample(b, (size_t)w, albedo, q.wo, q.u, q.wi, q.w, q.pdf, q.flags);
-            c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)__builtin_popcount(mask);
+            count_shading(c, w, __builtin_popcount(mask), true);
             for (int i = 0; i < n; i++) {
                 if (!(mask >> i & 1u)) continue;
                 packet_lane *l = &L[i];
@@ -785,7 +802,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                                 if (albedo) albedo_lit[k * lit + i] = albedo[k * n + lit_lane[i]];
                             }
                         job->shade_k->bsdf_eval(b, (size_t)lit, albedo ? albedo_lit : NULL, wo_c, wi_c, q.f, q.pdf);
-                        c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)lit;
+                        count_shading(c, w, lit, false);
                         for (int j = 0; j < lit; j++) {
                             uint32_t slot = st->shade_slot[st->sorted[b0 + lit_lane[j]]];
                             packet_lane *l = &st->path[slot];
@@ -805,7 +822,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
                     for (int k = 0; k < 3; k++) u_c[k * n + i] = lanes_random01(l->pixel, l->sample, l->ss_depth, DIM_BSDF_1 + (uint32_t)k);
                 }
                 job->shade_k->bsdf_sample(b, (size_t)n, albedo, wo_c, u_c, q.wi, q.w, q.pdf, q.flags);
-                c->shade_calls++, c->shade_slots += (uint64_t)w, c->shade_live += (uint64_t)n;
+                count_shading(c, w, n, true);
                 for (int i = 0; i < n; i++) {
                     packet_lane *l = &st->path[st->shade_slot[st->sorted[b0 + i]]];
                     l->pending_flags = q.flags[i];
@@ -1023,6 +1040,9 @@ lanes_status lanes_paths_render(const lanes_scene *scene, const lanes_render_acc
         out->shade_calls += counts[i].shade_calls;
         out->shade_slots += counts[i].shade_slots;
         out->shade_live += counts[i].shade_live;
+        out->sample_calls += counts[i].sample_calls;
+        out->sample_slots += counts[i].sample_slots;
+        out->sample_live += counts[i].sample_live;
         for (int d = 0; d <= LANES_PATHS_MAX_DEPTH; d++) out->rays_by_depth[d] += counts[i].by_depth[d];
         for (int k = 0; k < LANES_PATHS_STAGE_COUNT; k++) out->stage_seconds[k] += counts[i].stage_seconds[k];
     }

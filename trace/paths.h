@@ -123,6 +123,11 @@ typedef struct lanes_paths_result {
     /* Shading: kernel calls, the lane slots they offered and the lanes that
      * carried a hit; utilisation = live / slots. */
     uint64_t shade_calls, shade_slots, shade_live;
+    /* The bsdf_sample calls among them, one per material present in a
+     * packet's bounce or per W rays of a material in a stream's sorted
+     * order: what a recount from the materials of the hits each trace call
+     * returned gives (test_paths_sets does it). */
+    uint64_t sample_calls, sample_slots, sample_live;
     double stage_seconds[LANES_PATHS_STAGE_COUNT]; /* stream method */
     size_t stream_bytes;                            /* stream method: each thread's stream state */
 } lanes_paths_result;
