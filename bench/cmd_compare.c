@@ -564,7 +564,7 @@ static const char usage[] =
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
     "on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2) and\n"
-    "through Embree (each of rtcIntersect1/4/8/16/1M, default and coherent\n"
+    "through Embree (each of rtcIntersect1/4/8/16/1M/Np, default and coherent\n"
     "contexts; rtcOccluded* for shadow rays), on one pinned thread and on N, and\n"
     "prints Mrays/s with the ratio to the best Embree API for the same rays and\n"
     "threads.\n"

@@ -67,10 +67,10 @@ const char *lanes_embree_isa_all_names(void) { return "sse2, sse4.2, avx, avx2, 
 
 const char *lanes_embree_method_name(lanes_embree_method m, bool occlusion)
 {
-    static const char *const isect[] = {"rtcIntersect1", "rtcIntersect4", "rtcIntersect8",
-                                        "rtcIntersect16", "rtcIntersect1M"};
-    static const char *const occl[] = {"rtcOccluded1", "rtcOccluded4", "rtcOccluded8",
-                                       "rtcOccluded16", "rtcOccluded1M"};
+    static const char *const isect[] = {"rtcIntersect1",  "rtcIntersect4",  "rtcIntersect8",
+                                        "rtcIntersect16", "rtcIntersect1M", "rtcIntersectNp"};
+    static const char *const occl[] = {"rtcOccluded1",  "rtcOccluded4",  "rtcOccluded8",
+                                       "rtcOccluded16", "rtcOccluded1M", "rtcOccludedNp"};
     if (m < 0 || m >= LANES_EMBREE_METHOD_COUNT) return "?";
     return occlusion ? occl[m] : isect[m];
 }
@@ -168,6 +168,7 @@ lanes_status lanes_embree_create(const lanes_scene *scene, lanes_embree_isa isa,
     e->native[LANES_EMBREE_8] = rtcGetDeviceProperty(e->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
     e->native[LANES_EMBREE_16] = rtcGetDeviceProperty(e->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
     e->native[LANES_EMBREE_1M] = rtcGetDeviceProperty(e->device, RTC_DEVICE_PROPERTY_RAY_STREAM_SUPPORTED) != 0;
+    e->native[LANES_EMBREE_NP] = e->native[LANES_EMBREE_1M];
 
     /* Three vertices per triangle, as the scene stores them: no welding, so
      * primID i is scene triangle i and each triangle's vertices are bitwise
@@ -229,9 +230,47 @@ bool lanes_embree_supports(const lanes_embree *e, lanes_embree_method m)
 
 /* ---- batches ---------------------------------------------------------- */
 
+/* The Np layout: one array per field, in RTCRayNp's order, then
+ * RTCHitNp's (Ng_x, Ng_y, Ng_z, u, v, primID, geomID, instID[0]). */
+enum { NP_ORG_X, NP_ORG_Y, NP_ORG_Z, NP_TNEAR, NP_DIR_X, NP_DIR_Y, NP_DIR_Z, NP_TIME, NP_TFAR, NP_MASK, NP_ID, NP_FLAGS,
+       NP_RAY_FIELDS, NP_NG_X = NP_RAY_FIELDS, NP_NG_Y, NP_NG_Z, NP_U, NP_V, NP_PRIM, NP_GEOM, NP_INST, NP_FIELDS };
+
+static float *np_field(const lanes_embree_batch *b, int field) { return (float *)b->data + (size_t)field * b->count; }
+static unsigned *np_ufield(const lanes_embree_batch *b, int field) { return (unsigned *)b->data + (size_t)field * b->count; }
+
+/* Rays [begin, end) of an Np batch as Embree's pointer structs. */
+static struct RTCRayNp np_rays(const lanes_embree_batch *b, size_t begin)
+{
+    return (struct RTCRayNp){np_field(b, NP_ORG_X) + begin, np_field(b, NP_ORG_Y) + begin, np_field(b, NP_ORG_Z) + begin,
+                             np_field(b, NP_TNEAR) + begin, np_field(b, NP_DIR_X) + begin, np_field(b, NP_DIR_Y) + begin,
+                             np_field(b, NP_DIR_Z) + begin, np_field(b, NP_TIME) + begin, np_field(b, NP_TFAR) + begin,
+                             np_ufield(b, NP_MASK) + begin, np_ufield(b, NP_ID) + begin, np_ufield(b, NP_FLAGS) + begin};
+}
+
+static struct RTCHitNp np_hits(const lanes_embree_batch *b, size_t begin)
+{
+    return (struct RTCHitNp){np_field(b, NP_NG_X) + begin,  np_field(b, NP_NG_Y) + begin,   np_field(b, NP_NG_Z) + begin,
+                             np_field(b, NP_U) + begin,     np_field(b, NP_V) + begin,      np_ufield(b, NP_PRIM) + begin,
+                             np_ufield(b, NP_GEOM) + begin, {np_ufield(b, NP_INST) + begin}};
+}
+
+static void np_fill(lanes_embree_batch *b, const lanes_ray *rays)
+{
+    for (size_t i = 0; i < b->count; i++) {
+        const lanes_ray *s = &rays[i];
+        np_field(b, NP_ORG_X)[i] = s->o[0], np_field(b, NP_ORG_Y)[i] = s->o[1], np_field(b, NP_ORG_Z)[i] = s->o[2];
+        np_field(b, NP_DIR_X)[i] = s->d[0], np_field(b, NP_DIR_Y)[i] = s->d[1], np_field(b, NP_DIR_Z)[i] = s->d[2];
+        np_field(b, NP_TNEAR)[i] = s->tnear, np_field(b, NP_TFAR)[i] = s->tfar, np_field(b, NP_TIME)[i] = 0.0f;
+        np_ufield(b, NP_MASK)[i] = ~0u, np_ufield(b, NP_ID)[i] = (unsigned)i, np_ufield(b, NP_FLAGS)[i] = 0;
+        if (!b->occlusion)
+            np_ufield(b, NP_PRIM)[i] = np_ufield(b, NP_GEOM)[i] = np_ufield(b, NP_INST)[i] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
 static size_t element_size(lanes_embree_method m, bool occlusion)
 {
     switch (m) {
+    case LANES_EMBREE_NP: return (occlusion ? NP_RAY_FIELDS : NP_FIELDS) * sizeof(float);
     case LANES_EMBREE_4: return occlusion ? sizeof(struct RTCRay4) : sizeof(struct RTCRayHit4);
     case LANES_EMBREE_8: return occlusion ? sizeof(struct RTCRay8) : sizeof(struct RTCRayHit8);
     case LANES_EMBREE_16: return occlusion ? sizeof(struct RTCRay16) : sizeof(struct RTCRayHit16);
@@ -311,6 +350,7 @@ lanes_status lanes_embree_batch_init(lanes_embree_batch *b, lanes_embree_method 
     case LANES_EMBREE_4: PACKET_FILL(RTCRay4, RTCHit4, 4); break;
     case LANES_EMBREE_8: PACKET_FILL(RTCRay8, RTCHit8, 8); break;
     case LANES_EMBREE_16: PACKET_FILL(RTCRay16, RTCHit16, 16); break;
+    case LANES_EMBREE_NP: np_fill(b, rays); break;
     default:
         for (size_t i = 0; i < n; i++) {
             struct RTCRay *r = occlusion ? (struct RTCRay *)b->data + i
@@ -375,6 +415,16 @@ void lanes_embree_batch_trace(const lanes_embree *e, lanes_embree_batch *b, size
             rtcIntersect1M(s, &ctx, (struct RTCRayHit *)b->data + begin, (unsigned)(end - begin),
                            sizeof(struct RTCRayHit));
         break;
+    case LANES_EMBREE_NP: {
+        struct RTCRayNp r = np_rays(b, begin);
+        if (b->occlusion) {
+            rtcOccludedNp(s, &ctx, &r, (unsigned)(end - begin));
+        } else {
+            struct RTCRayHitNp rh = {r, np_hits(b, begin)};
+            rtcIntersectNp(s, &ctx, &rh, (unsigned)(end - begin));
+        }
+        break;
+    }
 #define PACKET_LOOP(W)                                                                     \
     for (size_t k = begin / (W); k * (W) < end; k++) {                                     \
         const int *valid = k == last ? b->valid_tail : b->valid_full;                      \
@@ -413,6 +463,11 @@ void lanes_embree_batch_hits(const lanes_embree_batch *b, lanes_hit *hits)
     case LANES_EMBREE_8: PACKET_HITS(8) break;
     case LANES_EMBREE_16: PACKET_HITS(16) break;
 #undef PACKET_HITS
+    case LANES_EMBREE_NP:
+        for (size_t i = 0; i < n; i++)
+            hits[i] = make_hit(np_ufield(b, NP_GEOM)[i], np_ufield(b, NP_PRIM)[i], np_field(b, NP_TFAR)[i],
+                               np_field(b, NP_U)[i], np_field(b, NP_V)[i]);
+        break;
     default:
         for (size_t i = 0; i < n; i++) {
             const struct RTCRayHit *r = (const struct RTCRayHit *)b->data + i;
@@ -437,6 +492,9 @@ void lanes_embree_batch_occluded(const lanes_embree_batch *b, uint8_t *occluded)
     case LANES_EMBREE_8: PACKET_OCC(8) break;
     case LANES_EMBREE_16: PACKET_OCC(16) break;
 #undef PACKET_OCC
+    case LANES_EMBREE_NP:
+        for (size_t i = 0; i < n; i++) occluded[i] = np_field(b, NP_TFAR)[i] == -INFINITY;
+        break;
     default:
         for (size_t i = 0; i < n; i++) occluded[i] = ((const struct RTCRay *)b->data)[i].tfar == -INFINITY;
         break;

@@ -45,6 +45,7 @@ typedef enum lanes_embree_method {
     LANES_EMBREE_8,
     LANES_EMBREE_16,
     LANES_EMBREE_1M,    /* rtcIntersect1M / rtcOccluded1M, one call per range */
+    LANES_EMBREE_NP,    /* rtcIntersectNp / rtcOccludedNp: the stream as SoA arrays, one call per range */
     LANES_EMBREE_METHOD_COUNT
 } lanes_embree_method;
 
@@ -76,7 +77,8 @@ const char *lanes_embree_error(const lanes_embree *e);
 
 /* Rays laid out for one method: RTCRayHit / RTCRay arrays for the single
  * and stream calls, RTCRayHitW / RTCRayW packet arrays (aligned to 16, 32,
- * 64 bytes) for the packets. A pristine copy restores the rays that a trace
+ * 64 bytes) for the packets, one array of count 32-bit values per field
+ * (ray fields, then hit fields) for the Np call. A pristine copy restores the rays that a trace
  * overwrote (tfar, hit) before the next repetition. */
 typedef struct lanes_embree_batch {
     lanes_embree_method method;
