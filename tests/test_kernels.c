@@ -305,6 +305,79 @@ static void prepare_ray(tk_rng *rng, ref_ray *r)
  * test_simd_ops_set.c); one CPU's table may do better, another worse. */
 static const double prepare_fast_bound[3] = {5.0 * 0x1p-24, 4.0 * 0x1p-24, 2.0 * 0x1p-24};
 
+/* rays_load_soa against the one-ray set-up: the same rays bit for bit,
+ * from arrays at an odd offset, every count up to a few vectors; the
+ * invalid flagged; every ray whose span with the box reaches beyond far2
+ * (in double) flagged, and none flagged that falls short by 2^-17; nothing
+ * written past n. */
+static void load_soa(tk_ctx *c, const ref_ray *raw, size_t n, tk_rng *rng)
+{
+    float *arrays[8];
+    lanes_ray *out = malloc((n + 1) * sizeof *out);
+    uint8_t *flags = malloc(n + 1);
+    for (int k = 0; k < 8; k++) arrays[k] = malloc((n + 1) * sizeof(float));
+    if (!out || !flags) abort();
+    for (int k = 0; k < 8; k++)
+        if (!arrays[k]) abort();
+    for (size_t j = 0; j < n; j++) {
+        for (int a = 0; a < 3; a++) arrays[a][j + 1] = raw[j].o[a], arrays[3 + a][j + 1] = raw[j].d[a];
+        arrays[6][j + 1] = raw[j].tnear, arrays[7][j + 1] = raw[j].tfar;
+    }
+    const float *soa[8];
+    for (int k = 0; k < 8; k++) soa[k] = arrays[k] + 1; /* unaligned */
+    for (int i = 0; i < c->n_isa; i++) {
+        const lanes_kernels *k = c->isa[i];
+        tk_group g;
+        tk_begin(&g, c, "%s rays_load_soa", k->name);
+        size_t far_rays = 0, flagged_far = 0;
+        for (int round = 0; round < 2 * LANES_MAX_W + 2; round++) {
+            /* the last round all rays; the others every count up to 2W */
+            bool last = round == 2 * LANES_MAX_W + 1, with_box = last || !(round & 1);
+            size_t m = last ? n : (size_t)round;
+            const float box[6] = {-10.0f, -20.0f, -5.0f, 10.0f, 5.0f, 30.0f};
+            float far2 = (float)tk_range(rng, 400.0, 60000.0);
+            memset(out, 0xa5, (n + 1) * sizeof *out);
+            memset(flags, 0xa5, n + 1);
+            size_t got = k->rays_load_soa(soa, m, with_box ? box : NULL, far2, out, flags);
+            size_t counted = 0;
+            for (size_t j = 0; j < m; j++) {
+                lanes_ray want = {{raw[j].o[0], raw[j].o[1], raw[j].o[2]},
+                                  {raw[j].d[0], raw[j].d[1], raw[j].d[2]},
+                                  {0, 0, 0},
+                                  raw[j].tnear,
+                                  raw[j].tfar};
+                bool valid = lanes_ray_prepare(&want);
+                counted += flags[j] != 0;
+                bool same = tk_bits(out[j].tnear) == tk_bits(want.tnear) && tk_bits(out[j].tfar) == tk_bits(want.tfar);
+                for (int a = 0; a < 3; a++)
+                    same = same && tk_bits(out[j].o[a]) == tk_bits(want.o[a]) && tk_bits(out[j].d[a]) == tk_bits(want.d[a]) &&
+                           (!valid || tk_bits(out[j].rd[a]) == tk_bits(want.rd[a]));
+                if (!same) tk_fail(&g, "count %zu ray %zu: differs from lanes_ray_prepare", m, j);
+                if (!valid) {
+                    if (flags[j] != LANES_RAY_INVALID) tk_fail(&g, "count %zu ray %zu: invalid, flags %d", m, j, flags[j]);
+                    continue;
+                }
+                double reach2 = 0.0;
+                for (int a = 0; a < 3; a++) {
+                    double o = raw[j].o[a], e = fmax(box[3 + a], o) - fmin(box[a], o);
+                    reach2 += e * e;
+                }
+                bool beyond = with_box && reach2 > far2, short_of = !with_box || reach2 < far2 * (1.0 - 0x1p-17);
+                far_rays += beyond, flagged_far += flags[j] == LANES_RAY_MAYBE_FAR;
+                if ((beyond && flags[j] != LANES_RAY_MAYBE_FAR) || (short_of && flags[j] != 0))
+                    tk_fail(&g, "count %zu ray %zu: span^2 %.9g against %.9g, flags %d", m, j, reach2, (double)far2,
+                            flags[j]);
+            }
+            if (got != counted) tk_fail(&g, "count %zu: returned %zu flagged, %zu are", m, got, counted);
+            if (flags[m] != 0xa5 || tk_bits(out[m].tnear) != 0xa5a5a5a5u)
+                tk_fail(&g, "count %zu: written past the count", m);
+        }
+        tk_end(&g, "%zu rays beyond the reach, %zu flagged", far_rays, flagged_far);
+    }
+    for (int k = 0; k < 8; k++) free(arrays[k]);
+    free(out), free(flags);
+}
+
 void tk_family_prepare(tk_ctx *c, int arg)
 {
     (void)arg;
@@ -469,6 +542,7 @@ void tk_family_prepare(tk_ctx *c, int arg)
         }
     lanes_rays_free(&R);
     lanes_rays_free(&want);
+    load_soa(c, raw, n, &rng);
     free(raw);
 }
 

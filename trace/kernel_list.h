@@ -22,8 +22,22 @@
 #ifndef LANES_TRACE_KERNEL_LIST_H
 #define LANES_TRACE_KERNEL_LIST_H
 
-/* ray_kernels.c: computes 1/d and deactivates invalid rays. */
-#define LANES_KERNELS_RAY(X) X(PLAIN, void, rays_prepare, (lanes_rays * rays, lanes_rcp_mode mode), ())
+/* ray_kernels.c: computes 1/d and deactivates invalid rays.
+ * rays_load_soa: n rays given as eight arrays (ox, oy, oz, dx, dy, dz,
+ *   tnear, tfar; any alignment) into out[0..n-1] prepared as
+ *   lanes_ray_prepare_rcp prepares one in the exact mode (1/d exact,
+ *   infinite ends made finite, an invalid ray inactive). flags[i]:
+ *   LANES_RAY_INVALID for a ray lanes_ray_valid refuses; else
+ *   LANES_RAY_MAYBE_FAR when box (min xyz, max xyz; may be NULL) and the
+ *   origin span a diagonal whose square may exceed far2 (a float bound
+ *   that never misses one beyond: the caller decides in double). Returns
+ *   the number of rays flagged. */
+#define LANES_KERNELS_RAY(X)                                                               \
+    X(PLAIN, void, rays_prepare, (lanes_rays * rays, lanes_rcp_mode mode), ())             \
+    X(PLAIN, size_t, rays_load_soa,                                                        \
+      (const float *const *soa, size_t n, const float *box, float far2, lanes_ray *out,    \
+       uint8_t *flags),                                                                    \
+      ())
 
 /* box_kernels.c
  * box_packet: N rays against one box. idx, when not NULL, names the rays to

@@ -50,6 +50,9 @@ typedef enum lanes_rcp_mode {
     LANES_RCP_MODE_COUNT
 } lanes_rcp_mode;
 
+/* rays_load_soa's flags per ray. */
+enum { LANES_RAY_INVALID = 1, LANES_RAY_MAYBE_FAR = 2 };
+
 /* 1 + 2 gamma(3) (Ize, "Robust BVH Ray Traversal", 2013): the slab exit
  * scaled by this is never below the exact exit, whatever the three
  * roundings of (plane - o) * (1/d) did. Without it a ray that passes exactly

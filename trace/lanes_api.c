@@ -6,6 +6,7 @@
  * exported from the shared library. */
 #include "lanes/lanes.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdatomic.h>
@@ -523,9 +524,23 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
     refused_rays bad = {0};
     lanes_ray chunk[STREAM_CHUNK];
     lanes_hit found[STREAM_CHUNK];
+    uint8_t flags[STREAM_CHUNK];
+    const float box[6] = {accel->bounds_min[0], accel->bounds_min[1], accel->bounds_min[2],
+                          accel->bounds_max[0], accel->bounds_max[1], accel->bounds_max[2]};
+    const float far2 = (float)fmin(accel->max_reach * accel->max_reach, FLT_MAX);
     for (size_t first = 0; first < n; first += STREAM_CHUNK) {
         size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
-        for (size_t i = 0; i < m; i++) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
+        if (rcp == LANES_RCP_EXACT) {
+            /* the set's SIMD set-up; the flagged rays again one at a time */
+            const float *const soa[8] = {rays->org_x + first, rays->org_y + first, rays->org_z + first,
+                                         rays->dir_x + first, rays->dir_y + first, rays->dir_z + first,
+                                         rays->tnear + first, rays->tfar + first};
+            if (d->k->rays_load_soa(soa, m, box, far2, chunk, flags) > 0)
+                for (size_t i = 0; i < m; i++)
+                    if (flags[i]) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
+        } else {
+            for (size_t i = 0; i < m; i++) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
+        }
         if (occluded) {
             memset(occluded + first, 0, m);
             (packets ? d->k->occluded_hybrid : d->k->occluded_wide)(&accel->wide, d->accuracy, chunk, m,

@@ -43,3 +43,51 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
         lanes_store_below(r->tfar, i, r->count, tf);
     }
 }
+
+size_t LANES_FN(lanes_rays_load_soa)(const float *const *soa, size_t n, const float *box, float far2, lanes_ray *out,
+                                     uint8_t *flags)
+{
+    const vfloat zero = vf_zero();
+    size_t flagged = 0;
+    for (size_t i = 0; i < n; i += LANES_W) {
+        size_t here = n - i < LANES_W ? n - i : LANES_W;
+        vmask in = vm_first_n(here);
+        vfloat v[8];
+        for (int k = 0; k < 8; k++) v[k] = here == LANES_W ? vf_loadu(soa[k] + i) : vf_load_masked(in, soa[k] + i);
+        vmask ok = vm_and(finite(v[0]), vm_and(finite(v[1]), finite(v[2])));
+        ok = vm_and(ok, vm_and(finite(v[3]), vm_and(finite(v[4]), finite(v[5]))));
+        ok = vm_and(ok, vm_not(vm_or(vf_isnan(v[6]), vf_isnan(v[7]))));
+        ok = vm_and(ok, vm_or(vf_neq(v[3], zero), vm_or(vf_neq(v[4], zero), vf_neq(v[5], zero))));
+        /* as lanes_rays_prepare: finite ends, the inactive interval for an invalid ray */
+        vfloat tn = vf_select(ok, vf_max(v[6], vf_set1(-FLT_MAX)), vf_set1(INFINITY));
+        vfloat tf = vf_select(ok, vf_min(v[7], vf_set1(FLT_MAX)), vf_set1(-INFINITY));
+        vmask far = vm_false();
+        if (box) {
+            /* each step rounds by at most 2^-24 relative, so a square
+             * within 2^-18 of far2 is flagged for the exact test */
+            vfloat r2 = zero;
+            for (int k = 0; k < 3; k++) {
+                vfloat e = vf_sub(vf_max(vf_set1(box[3 + k]), v[k]), vf_min(vf_set1(box[k]), v[k]));
+                r2 = vf_add(r2, vf_mul(e, e));
+            }
+            far = vm_and(ok, vf_gt(r2, vf_set1(far2 * (1.0f - 0x1p-18f))));
+        }
+        float lane[11][LANES_W];
+        for (int k = 0; k < 6; k++) vf_storeu(lane[k], v[k]);
+        vf_storeu(lane[6], vf_rcp(v[3]));
+        vf_storeu(lane[7], vf_rcp(v[4]));
+        vf_storeu(lane[8], vf_rcp(v[5]));
+        vf_storeu(lane[9], tn);
+        vf_storeu(lane[10], tf);
+        uint32_t bad = vm_bits(vm_andnot(in, ok)), maybe_far = vm_bits(far);
+        for (size_t j = 0; j < here; j++) {
+            lanes_ray *r = &out[i + j];
+            for (int k = 0; k < 3; k++) r->o[k] = lane[k][j], r->d[k] = lane[3 + k][j], r->rd[k] = lane[6 + k][j];
+            r->tnear = lane[9][j], r->tfar = lane[10][j];
+            uint8_t f = (bad >> j & 1u) ? LANES_RAY_INVALID : (maybe_far >> j & 1u) ? LANES_RAY_MAYBE_FAR : 0;
+            flags[i + j] = f;
+            flagged += f != 0;
+        }
+    }
+    return flagged;
+}
