@@ -14,7 +14,11 @@
  *              time against packet's, the paper's comparison;
  *   engine:    single and stream with 36 clustered materials again, their
  *              rays traced by Embree (a lanes built with it): the same
- *              paths, lanes' traversal against Embree's.
+ *              paths, lanes' traversal against Embree's;
+ *   intersect: the stream's extension rays with 36 clustered materials,
+ *              captured and traced again through each intersection call
+ *              of lanes and Embree (bench/stream_intersect.h), after the
+ *              rounds above.
  * Utilisation does not depend on the run (the paths are the same); time
  * does. */
 #include "bench/study_paths.h"
@@ -25,6 +29,7 @@
 #include <unistd.h>
 
 #include "bench/cli_common.h"
+#include "bench/stream_intersect.h"
 #include "build/material_assign.h"
 #include "build/scene_load.h"
 #include "trace/paths.h"
@@ -163,7 +168,74 @@ static void write_csv(const char *path, const paths_rows *rows, int reps)
     cli_finish_file("study --paths", path, f);
 }
 
-static void write_json(const paths_rows *rows, int reps, const char *dir)
+/* The intersect experiment's results, [scene * nsets + set]. */
+typedef struct {
+    const stream_intersect_result *at;
+    int nsets;
+} intersect_results;
+
+static void write_intersect_csv(const char *path, const intersect_results *ir, char scenes[][64], int nscenes,
+                                const lanes_isa *sets)
+{
+    FILE *f = cli_create_file("study --paths", path);
+    fprintf(f, "scene,isa,call,engine,rays,streams,mrays,differ\n");
+    for (int s = 0; s < nscenes; s++)
+        for (int j = 0; j < ir->nsets; j++) {
+            const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
+            for (int a = 0; a < r->apis; a++)
+                fprintf(f, "%s,%s,%s,%s,%zu,%zu,%.4f,%zu\n", scenes[s], lanes_isa_name(sets[j]), r->api[a].name,
+                        r->api[a].embree ? "embree" : "lanes", r->rays, r->streams, r->api[a].mrays, r->api[a].differ);
+        }
+    cli_finish_file("study --paths", path, f);
+}
+
+/* The fastest call of one engine, or -1. */
+static int best_call(const stream_intersect_result *r, bool embree)
+{
+    int best = -1;
+    for (int a = 0; a < r->apis; a++)
+        if (r->api[a].embree == embree && (best < 0 || r->api[a].mrays > r->api[best].mrays)) best = a;
+    return best;
+}
+
+static void write_intersect_table(FILE *f, const intersect_results *ir, const char *scene, int s, const lanes_isa *sets)
+{
+    const stream_intersect_result *first = &ir->at[s * ir->nsets];
+    fprintf(f, "\n## %s: the intersection stage alone, on the stream's own extension rays (36 clustered materials, "
+               "stream 2048, 1 thread)\n\n",
+            scene);
+    fprintf(f, "%zu rays in %zu trace calls, captured from one stream render per set. Embree's packets take "
+               "consecutive rays across the calls; its Np and 1M calls and lanes' take one call per stream. "
+               "The lanes/Embree ratio to hold against: `lanes compare %s`'s diffuse rows.\n\n",
+            first->rays, first->streams, scene);
+    fprintf(f, "| set | call | Mrays/s | vs trace_wide | rays whose hit differs from trace_wide's |\n|---|---|---|---|---|\n");
+    for (int j = 0; j < ir->nsets; j++) {
+        const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
+        double base = r->apis ? r->api[0].mrays : 0.0;
+        for (int a = 0; a < r->apis; a++)
+            fprintf(f, "| %s | %s%s | %.2f | %.2f | %zu |\n", lanes_isa_name(sets[j]), r->api[a].name,
+                    r->api[a].embree ? "" : " (lanes)", r->api[a].mrays, base > 0.0 ? r->api[a].mrays / base : 0.0,
+                    r->api[a].differ);
+    }
+    fprintf(f, "\n| set | SoA call / AoS trace_wide | lanes' best | Embree's best (%s) | lanes / Embree |\n"
+               "|---|---|---|---|---|\n",
+            first->embree_isa[0] ? first->embree_isa : "not built");
+    for (int j = 0; j < ir->nsets; j++) {
+        const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
+        int l = best_call(r, false), e = best_call(r, true);
+        double soa = r->apis > 1 && r->api[0].mrays > 0.0 ? r->api[1].mrays / r->api[0].mrays : 0.0;
+        fprintf(f, "| %s | %.3f | %s %.2f |", lanes_isa_name(sets[j]), soa, l >= 0 ? r->api[l].name : "-",
+                l >= 0 ? r->api[l].mrays : 0.0);
+        if (e >= 0)
+            fprintf(f, " %s %.2f | %.2f |\n", r->api[e].name, r->api[e].mrays,
+                    r->api[e].mrays > 0.0 ? r->api[l].mrays / r->api[e].mrays : 0.0);
+        else
+            fprintf(f, " - | - |\n");
+    }
+}
+
+static void write_json(const paths_rows *rows, int reps, const char *dir, const intersect_results *ir, char scenes[][64],
+                       int nscenes, const lanes_isa *sets)
 {
     printf("{\"cpu\": ");
     cli_json_string(stdout, lanes_cpu()->brand);
@@ -192,6 +264,19 @@ static void write_json(const paths_rows *rows, int reps, const char *dir)
         printf("}");
         printf("}");
     }
+    printf("], \"stream_intersect\": [");
+    for (int s = 0, n = 0; s < nscenes; s++)
+        for (int j = 0; j < ir->nsets; j++) {
+            const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
+            for (int a = 0; a < r->apis; a++) {
+                printf("%s{\"scene\": ", n++ ? ", " : "");
+                cli_json_string(stdout, scenes[s]);
+                printf(", \"isa\": \"%s\", \"call\": \"%s\", \"engine\": \"%s\", \"rays\": %zu, \"mrays\": ",
+                       lanes_isa_name(sets[j]), r->api[a].name, r->api[a].embree ? "embree" : "lanes", r->rays);
+                cli_json_number(stdout, r->api[a].mrays);
+                printf(", \"differ\": %zu}", r->api[a].differ);
+            }
+        }
     printf("]}\n");
 }
 
@@ -213,7 +298,7 @@ static const int material_counts[] = {1, 4, 16, 64, 256};
 enum { NSTREAM = sizeof stream_sizes / sizeof stream_sizes[0], NMAT = sizeof material_counts / sizeof material_counts[0] };
 
 static void write_tables(const char *path, const paths_rows *rows, char scenes[][64], int nscenes, const lanes_isa *sets,
-                         int nsets, const paths_study_options *o)
+                         int nsets, const paths_study_options *o, const intersect_results *ir)
 {
     FILE *f = cli_create_file("study --paths", path);
     fprintf(f, "# Path tracing with shading coherence (Afra et al. 2016)\n\n");
@@ -289,6 +374,7 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
                         fprintf(f, " - | - |\n");
                 }
         }
+        write_intersect_table(f, ir, scenes[s], s, sets);
         fprintf(f, "\n## %s: clustered materials: shading utilisation, packet / stream\n\n| materials |", scenes[s]);
         for (int j = 0; j < nsets; j++) fprintf(f, " %s |", lanes_isa_name(sets[j]));
         fprintf(f, "\n|---|");
@@ -363,6 +449,9 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
     cli_make_dirs("study --paths", o->out_dir);
     paths_rows rows = {0};
     char scenes[16][64];
+    stream_intersect_result *intersect = calloc((size_t)nspecs * (size_t)nsets, sizeof *intersect);
+    if (!intersect) cli_fail("study --paths: out of memory");
+    intersect_results ir = {intersect, nsets};
     for (int s = 0; s < nspecs; s++) {
         /* the rows of this scene, then their rounds */
         size_t first = rows.count;
@@ -433,6 +522,13 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
                 measure(r, sc, o, round);
             }
         if (!o->json && isatty(2)) fprintf(stderr, "\n");
+        for (int j = 0; j < nsets; j++) {
+            if (!o->json && isatty(2))
+                fprintf(stderr, "\r%s: the intersection stage at %s        ", scenes[s], lanes_isa_name(sets[j]));
+            lanes_stream_intersect_measure(&clustered36.scene, sets[j], o->width, o->height, o->spp, 2048, o->reps,
+                                           (size_t)1 << 22, &intersect[s * nsets + j]);
+        }
+        if (!o->json && isatty(2)) fprintf(stderr, "\n");
         scene_close(&own);
         scene_close(&clustered36);
         scene_close(&clustered111);
@@ -442,18 +538,23 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
     snprintf(path, sizeof path, "%s/paths.csv", o->out_dir);
     write_csv(path, &rows, o->reps);
     snprintf(path, sizeof path, "%s/tables.md", o->out_dir);
-    write_tables(path, &rows, scenes, nspecs, sets, nsets, o);
+    write_tables(path, &rows, scenes, nspecs, sets, nsets, o, &ir);
+    char csv_path[1200];
+    snprintf(csv_path, sizeof csv_path, "%s/stream_intersect.csv", o->out_dir);
+    write_intersect_csv(csv_path, &ir, scenes, nspecs, sets);
     write_plots(o->out_dir, &rows, scenes[0], sets, nsets);
     if (o->json) {
-        write_json(&rows, o->reps, o->out_dir);
+        write_json(&rows, o->reps, o->out_dir, &ir, scenes, nspecs, sets);
     } else {
         FILE *t = fopen(path, "r");
         char line[1024];
         while (t && fgets(line, sizeof line, t)) fputs(line, stdout);
         if (t) fclose(t);
-        printf("\nwrote %s/paths.csv, %s/tables.md, util_vs_stream.png and util_vs_materials.png\n", o->out_dir,
-               o->out_dir);
+        printf("\nwrote %s/paths.csv, %s/stream_intersect.csv, %s/tables.md, util_vs_stream.png and "
+               "util_vs_materials.png\n",
+               o->out_dir, o->out_dir, o->out_dir);
     }
+    free(intersect);
     free(rows.rows);
     return 0;
 }

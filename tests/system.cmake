@@ -211,7 +211,11 @@ if(lanes_cli_target)
   add_test(NAME cli.study_paths
     COMMAND bash -c "set -e; rm -rf \"$1/study_paths\"; \"$0\" study --paths --reps 1 --size 32x32 --out \"$1/study_paths\" > /dev/null; \
                      for e in methods stream materials clustered; do grep -q \",$e,\" \"$1/study_paths/paths.csv\"; done; \
-                     grep -q 'stream size' \"$1/study_paths/tables.md\"; grep -q 'packet.s shading s / this' \"$1/study_paths/tables.md\"; grep -q ',engine,stream,embree,' \"$1/study_paths/paths.csv\""
+                     grep -q 'stream size' \"$1/study_paths/tables.md\"; grep -q 'packet.s shading s / this' \"$1/study_paths/tables.md\"; grep -q ',engine,stream,embree,' \"$1/study_paths/paths.csv\"; \
+                     f=\"$1/study_paths/stream_intersect.csv\"; grep -q ',trace_wide (AoS),lanes,' \"$f\"; \
+                     grep -q ',lanes_intersect_stream (SoA),lanes,' \"$f\"; grep -q ',rtcIntersectNp,embree,' \"$f\"; \
+                     awk -F, 'NR > 1 && ($5 == 0 || ($4 == \"lanes\" && $8 != 0) || $8 * 100 > $5) { bad = 1 } END { exit bad }' \"$f\"; \
+                     grep -q 'SoA call / AoS trace_wide' \"$1/study_paths/tables.md\""
             $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
   list(APPEND lanes_output_tests cli.study_paths)
   set_tests_properties(cli.output_folders cli.output_unwritable cli.image_unwritable ${lanes_output_tests} PROPERTIES
