@@ -241,6 +241,20 @@ static vec3 bsdf_f(const paths_job *job, const lanes_bsdf *b, const float *albed
     return v3(f[0], f[1], f[2]);
 }
 
+/* A hit's triangle and material, asked of memory ahead of path_vertex:
+ * methods that hold many hits at once overlap the cache misses that one
+ * path at a time waits out one by one. */
+enum { PREFETCH_AHEAD = 8 };
+
+static void prefetch_hit(const lanes_scene *s, const lanes_hit *h)
+{
+    if (h->prim == LANES_NO_HIT) return;
+    const float *v = s->verts + (size_t)h->prim * 9;
+    __builtin_prefetch(v);
+    __builtin_prefetch(v + 8); /* 36 bytes may straddle two lines */
+    __builtin_prefetch(&s->material_of[h->prim]);
+}
+
 /* ---- one path ------------------------------------------------------------ */
 
 static vec3 background(const paths_job *job, vec3 d)
@@ -524,6 +538,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
                 lanes_ray_prepare_rcp(&rays[nr++], job->rcp);
             }
         trace_rays(job, rays, (size_t)nr, found);
+        for (int k = 0; k < nr; k++) prefetch_hit(job->scene, &found[k]);
         for (int i = 0, k = 0; i < n; i++)
             if (L[i].alive) hits[i] = found[k++];
         t = stage_clock(&stage[LANES_PATHS_STAGE_INTERSECT], t);
@@ -748,6 +763,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
         /* hits: background, emission; what is left to shade */
         int ns = 0;
         for (int r = 0; r < nr; r++) {
+            if (r + PREFETCH_AHEAD < nr) prefetch_hit(s, &st->hits[r + PREFETCH_AHEAD]);
             uint32_t slot = st->ray_slot[r];
             packet_lane *l = &st->path[slot];
             int depth = (int)l->ss_depth;
