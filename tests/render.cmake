@@ -83,3 +83,8 @@ target_link_libraries(test_paths_sets PRIVATE lanes_render)
 target_include_directories(test_paths_sets PRIVATE ${CMAKE_CURRENT_LIST_DIR})
 add_test(NAME render.paths_sets COMMAND test_paths_sets ${CMAKE_CURRENT_LIST_DIR}/data)
 set_tests_properties(render.paths_sets PROPERTIES LABELS render TIMEOUT 300)
+add_test(NAME render.paths_sets.sponza_bunny
+         COMMAND test_paths_sets ${CMAKE_CURRENT_LIST_DIR}/data --builtin sponza-bunny)
+set_tests_properties(render.paths_sets.sponza_bunny PROPERTIES
+  LABELS render TIMEOUT 600 SKIP_RETURN_CODE 77 FIXTURES_REQUIRED lanes_meshes
+  ENVIRONMENT "LANES_MESH_DIR=${LANES_MESH_DIR}")
