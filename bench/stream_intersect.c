@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "bench/cli_common.h"
+#include "build/grow_array.h"
 #include "trace/paths.h"
 #include "trace/render.h"
 #ifdef LANES_HAVE_COMPARE
@@ -27,24 +28,13 @@ typedef struct {
     bool out_of_memory;
 } capture;
 
-static bool grow(void **p, size_t *capacity, size_t need, size_t size)
-{
-    if (need <= *capacity) return true;
-    size_t cap = *capacity ? *capacity : 1024;
-    while (cap < need) cap *= 2;
-    void *q = realloc(*p, cap * size);
-    if (!q) return false;
-    *p = q, *capacity = cap;
-    return true;
-}
-
 static void capture_trace(void *ctx, const lanes_ray *rays, size_t n, lanes_hit *hits)
 {
     capture *c = ctx;
     c->k->trace_wide(&c->accel->wide, LANES_ACCURACY_DEFAULT, rays, n, hits, NULL);
     if (n == 0 || c->count + n > c->limit || c->out_of_memory) return;
-    if (!grow((void **)&c->rays, &c->capacity, c->count + n, sizeof *c->rays) ||
-        !grow((void **)&c->stream_end, &c->stream_capacity, c->streams + 1, sizeof *c->stream_end)) {
+    if (!lanes_grow_array((void **)&c->rays, &c->capacity, c->count + n, sizeof *c->rays) ||
+        !lanes_grow_array((void **)&c->stream_end, &c->stream_capacity, c->streams + 1, sizeof *c->stream_end)) {
         c->out_of_memory = true;
         return;
     }

@@ -28,6 +28,7 @@
 
 #include "build/bvh.h"
 #include "build/bvh_alloc.h"
+#include "build/grow_array.h"
 #include "build/parallel.h"
 
 #include <float.h>
@@ -367,18 +368,7 @@ typedef struct builder {
     lanes_bvh2 *out;
 } builder;
 
-static bool grow(void **p, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return true;
-    size_t c = *cap ? *cap : 16;
-    while (c < need) c *= 2;
-    void *q = realloc(*p, c * elem);
-    if (!q) return false;
-    *p = q;
-    *cap = c;
-    return true;
-}
-#define GROW(arr, cap, need) grow((void **)&(arr), &(cap), (need), sizeof(*(arr)))
+#define GROW(arr, cap, need) lanes_grow_array((void **)&(arr), &(cap), (need), sizeof(*(arr)))
 
 /* ------------------------------------------------------------------------
  * Phase 0: references. */

@@ -3,6 +3,7 @@
  * Compiled for the x86-64 baseline. */
 #include "build/scene.h"
 
+#include "build/grow_array.h"
 #include "build/memory_limit.h"
 
 #include <float.h>
@@ -113,30 +114,6 @@ static const char *material_problem(const lanes_material *m)
     return NULL;
 }
 
-/* Grows *array (of *cap elements of `size` bytes) to hold `need`. Growth is
- * geometric so repeated appends stay linear overall; every size is checked
- * against SIZE_MAX before multiplying. */
-static bool grow(void **array, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap)
-        return true;
-    size_t new_cap = *cap < 16 ? 16 : *cap;
-    while (new_cap < need) {
-        if (new_cap > SIZE_MAX / 2) {
-            new_cap = need;
-            break;
-        }
-        new_cap *= 2;
-    }
-    if (new_cap > SIZE_MAX / size)
-        return false;
-    void *p = realloc(*array, new_cap * size);
-    if (!p)
-        return false;
-    *array = p;
-    *cap = new_cap;
-    return true;
-}
 
 lanes_status lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lanes_error *err)
 {
@@ -162,10 +139,10 @@ lanes_status lanes_scene_reserve_triangles(lanes_scene *scene, size_t extra, lan
      * failure halfway leaves triangle_capacity describing both. */
     size_t cap_v = scene->triangle_capacity, cap_m = scene->triangle_capacity;
     void *v = scene->verts, *m = scene->material_of;
-    bool ok = grow(&v, &cap_v, need, 9 * sizeof(float));
+    bool ok = lanes_grow_array(&v, &cap_v, need, 9 * sizeof(float));
     scene->verts = v;
     if (ok) {
-        ok = grow(&m, &cap_m, need, sizeof(uint32_t));
+        ok = lanes_grow_array(&m, &cap_m, need, sizeof(uint32_t));
         scene->material_of = m;
     }
     if (!ok) {
@@ -211,7 +188,7 @@ lanes_status lanes_scene_add_material(lanes_scene *scene, const lanes_material *
                                LANES_SCENE_MAX_MATERIALS);
     }
     void *p = scene->materials;
-    bool ok = grow(&p, &scene->material_capacity, scene->material_count + 1, sizeof *m);
+    bool ok = lanes_grow_array(&p, &scene->material_capacity, scene->material_count + 1, sizeof *m);
     scene->materials = p;
     if (!ok) {
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for materials");
@@ -229,7 +206,7 @@ lanes_status lanes_scene_add_point_light(lanes_scene *scene, const lanes_point_l
                                "point light at (%g, %g, %g): beyond the %g a scene's coordinates may reach",
                                l->position[0], l->position[1], l->position[2], (double)LANES_SCENE_MAX_COORD);
     void *p = scene->point_lights;
-    bool ok = grow(&p, &scene->point_light_capacity, scene->point_light_count + 1, sizeof *l);
+    bool ok = lanes_grow_array(&p, &scene->point_light_capacity, scene->point_light_count + 1, sizeof *l);
     scene->point_lights = p;
     if (!ok) {
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for lights");
@@ -247,7 +224,7 @@ lanes_status lanes_scene_add_area_light(lanes_scene *scene, const lanes_area_lig
                                "area light at (%g, %g, %g): reaches beyond the %g a scene's coordinates may reach",
                                l->corner[0], l->corner[1], l->corner[2], (double)LANES_SCENE_MAX_COORD);
     void *p = scene->area_lights;
-    bool ok = grow(&p, &scene->area_light_capacity, scene->area_light_count + 1, sizeof *l);
+    bool ok = lanes_grow_array(&p, &scene->area_light_capacity, scene->area_light_count + 1, sizeof *l);
     scene->area_lights = p;
     if (!ok) {
         return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "out of memory for lights");

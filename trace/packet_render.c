@@ -3,6 +3,7 @@
 #include "trace/packet_render.h"
 
 #include "build/camera.h"
+#include "build/grow_array.h"
 #include "build/parallel.h"
 #include "trace/scene_plan.h"
 #include "trace/shading.h"
@@ -77,28 +78,17 @@ typedef struct {
     size_t n, cap;
 } shadow_list;
 
-static bool grow(void **a, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return true;
-    size_t c = *cap ? *cap : 1024;
-    while (c < need) c *= 2;
-    void *p = realloc(*a, c * elem);
-    if (!p) return false;
-    *a = p;
-    *cap = c;
-    return true;
-}
 
 static bool push_ray(ray_list *l, pending_ray r)
 {
-    if (!grow((void **)&l->a, &l->cap, l->n + 1, sizeof r)) return false;
+    if (!lanes_grow_array((void **)&l->a, &l->cap, l->n + 1, sizeof r)) return false;
     l->a[l->n++] = r;
     return true;
 }
 
 static bool push_shadow(shadow_list *l, pending_shadow r)
 {
-    if (!grow((void **)&l->a, &l->cap, l->n + 1, sizeof r)) return false;
+    if (!lanes_grow_array((void **)&l->a, &l->cap, l->n + 1, sizeof r)) return false;
     l->a[l->n++] = r;
     return true;
 }
@@ -376,7 +366,7 @@ static uint32_t exit_cell(const job_t *job, vec3 o, vec3 d)
 
 static bool ensure_keys(worker_t *w, size_t n)
 {
-    return grow((void **)&w->keys, &w->keys_cap, n, sizeof(uint64_t));
+    return lanes_grow_array((void **)&w->keys, &w->keys_cap, n, sizeof(uint64_t));
 }
 
 /* Sorts the rays into packets and traces them. Sort keys, high bits to low:
