@@ -51,7 +51,9 @@ static void capture_occluded(void *ctx, const lanes_ray *rays, size_t n, uint8_t
 
 /* ---- the calls raced ------------------------------------------------------ */
 
-typedef enum { CALL_AOS, CALL_SOA, CALL_EMBREE } call_kind;
+/* CALL_AOS_SETUP: the renderer's whole cost of a stream, its set-up (1/d
+ * and the checks, which its generate stage does) with the trace. */
+typedef enum { CALL_AOS, CALL_AOS_SETUP, CALL_SOA, CALL_EMBREE } call_kind;
 
 typedef struct {
     call_kind kind;
@@ -70,6 +72,7 @@ typedef struct {
     float *soa_hits;    /* t, u, v of count each */
     uint32_t *soa_prim;
     lanes_hit *hits;    /* the call being raced, as lanes_hit */
+    lanes_ray *scratch; /* CALL_AOS_SETUP's rays, set up again each run */
 #ifdef LANES_HAVE_COMPARE
     lanes_embree *embree;
 #endif
@@ -88,6 +91,15 @@ static double run(race *r, call *c)
         size_t end = cap->stream_end[s], m = end - begin;
         if (c->kind == CALL_AOS) {
             cap->k->trace_wide(&cap->accel->wide, LANES_ACCURACY_DEFAULT, cap->rays + begin, m, r->hits + begin, NULL);
+        } else if (c->kind == CALL_AOS_SETUP) {
+            for (size_t i = begin; i < end; i++) {
+                const lanes_ray *from = &cap->rays[i];
+                lanes_ray *to = &r->scratch[i];
+                *to = (lanes_ray){{from->o[0], from->o[1], from->o[2]}, {from->d[0], from->d[1], from->d[2]},
+                                  {0, 0, 0}, from->tnear, from->tfar};
+                lanes_ray_prepare_rcp(to, LANES_RCP_EXACT);
+            }
+            cap->k->trace_wide(&cap->accel->wide, LANES_ACCURACY_DEFAULT, r->scratch + begin, m, r->hits + begin, NULL);
         } else if (c->kind == CALL_SOA) {
             lanes_rays_soa rays = {r->soa + begin,         r->soa + n + begin,     r->soa + 2 * n + begin,
                                    r->soa + 3 * n + begin, r->soa + 4 * n + begin, r->soa + 5 * n + begin,
@@ -120,7 +132,7 @@ static double run(race *r, call *c)
 static void answers(race *r, call *c, lanes_hit *out)
 {
     size_t n = r->cap->count;
-    if (c->kind == CALL_AOS) {
+    if (c->kind == CALL_AOS || c->kind == CALL_AOS_SETUP) {
         memcpy(out, r->hits, n * sizeof *out);
     } else if (c->kind == CALL_SOA) {
         for (size_t i = 0; i < n; i++)
@@ -162,7 +174,8 @@ static void lay_out_soa(race *r)
     r->soa_hits = malloc(3 * n * sizeof *r->soa_hits);
     r->soa_prim = malloc(n * sizeof *r->soa_prim);
     r->hits = malloc(n * sizeof *r->hits);
-    if (!r->soa || !r->soa_hits || !r->soa_prim || !r->hits) cli_fail("study --paths: out of memory for %zu rays", n);
+    r->scratch = malloc(n * sizeof *r->scratch);
+    if (!r->soa || !r->soa_hits || !r->soa_prim || !r->hits || !r->scratch) cli_fail("study --paths: out of memory for %zu rays", n);
     for (size_t i = 0; i < n; i++) {
         const lanes_ray *ray = &cap->rays[i];
         for (int k = 0; k < 3; k++) r->soa[(size_t)k * n + i] = ray->o[k], r->soa[(size_t)(3 + k) * n + i] = ray->d[k];
@@ -191,7 +204,7 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     if (cap.out_of_memory) cli_fail("study --paths: out of memory capturing the streams");
     out->rays = cap.count, out->streams = cap.streams;
 
-    race r = {&cap, NULL, NULL, NULL, NULL, NULL
+    race r = {&cap, NULL, NULL, NULL, NULL, NULL, NULL
 #ifdef LANES_HAVE_COMPARE
               , NULL
 #endif
@@ -204,6 +217,8 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     snprintf(out->api[0].name, sizeof out->api[0].name, "trace_wide (AoS)");
     calls[ncalls++] = (call){.kind = CALL_SOA};
     snprintf(out->api[1].name, sizeof out->api[1].name, "lanes_intersect_stream (SoA)");
+    calls[ncalls++] = (call){.kind = CALL_AOS_SETUP};
+    snprintf(out->api[2].name, sizeof out->api[2].name, "set-up + trace_wide (AoS)");
 #ifdef LANES_HAVE_COMPARE
     if (lanes_embree_create(scene, lanes_embree_isa_best(), 0, &r.embree, &err) != LANES_OK)
         cli_fail("study --paths: %s", err.message);
@@ -249,7 +264,7 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     lanes_embree_destroy(r.embree);
 #endif
     lanes_accel_release(r.public_accel);
-    free(r.soa), free(r.soa_hits), free(r.soa_prim), free(r.hits);
+    free(r.soa), free(r.soa_hits), free(r.soa_prim), free(r.hits), free(r.scratch);
     free(cap.rays), free(cap.stream_end);
     lanes_render_accel_free(&accel);
 }

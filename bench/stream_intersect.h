@@ -4,7 +4,10 @@
  * streams of one `lanes paths --method stream` render are captured call
  * by call, then each captured stream is traced again through
  *   - the set's trace_wide on the renderer's AoS rays (what it calls),
- *   - the public SoA call, lanes_intersect_stream,
+ *   - the public SoA call, lanes_intersect_stream, which sets its rays up
+ *     (checks, 1/d) inside the call,
+ *   - the same set-up done on the AoS rays before trace_wide (what the
+ *     renderer's generate stage does for it),
  *   - Embree (a lanes built with it): rtcIntersect1 per ray, rtcIntersect8
  *     and 16 on consecutive rays, rtcIntersect1M and rtcIntersectNp (SoA,
  *     no copy) per stream; each with and without the coherent flag,

@@ -217,14 +217,15 @@ static void write_intersect_table(FILE *f, const intersect_results *ir, const ch
                     r->api[a].embree ? "" : " (lanes)", r->api[a].mrays, base > 0.0 ? r->api[a].mrays / base : 0.0,
                     r->api[a].differ);
     }
-    fprintf(f, "\n| set | SoA call / AoS trace_wide | lanes' best | Embree's best (%s) | lanes / Embree |\n"
-               "|---|---|---|---|---|\n",
+    fprintf(f, "\n| set | SoA call / AoS trace_wide | SoA call / AoS set-up + trace_wide | lanes' best | Embree's best (%s) | "
+               "lanes / Embree |\n|---|---|---|---|---|---|\n",
             first->embree_isa[0] ? first->embree_isa : "not built");
     for (int j = 0; j < ir->nsets; j++) {
         const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
         int l = best_call(r, false), e = best_call(r, true);
-        double soa = r->apis > 1 && r->api[0].mrays > 0.0 ? r->api[1].mrays / r->api[0].mrays : 0.0;
-        fprintf(f, "| %s | %.3f | %s %.2f |", lanes_isa_name(sets[j]), soa, l >= 0 ? r->api[l].name : "-",
+        double soa = r->apis > 2 && r->api[0].mrays > 0.0 ? r->api[1].mrays / r->api[0].mrays : 0.0;
+        double soa_setup = r->apis > 2 && r->api[2].mrays > 0.0 ? r->api[1].mrays / r->api[2].mrays : 0.0;
+        fprintf(f, "| %s | %.3f | %.3f | %s %.2f |", lanes_isa_name(sets[j]), soa, soa_setup, l >= 0 ? r->api[l].name : "-",
                 l >= 0 ? r->api[l].mrays : 0.0);
         if (e >= 0)
             fprintf(f, " %s %.2f | %.2f |\n", r->api[e].name, r->api[e].mrays,
