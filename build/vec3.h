@@ -8,6 +8,8 @@
 #define LANES_BUILD_VEC3_H
 
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
 
 #define LANES_PI 3.14159265358979323846f
 
@@ -43,28 +45,67 @@ static inline vec3 v3_abs(vec3 a) { return v3(fabsf(a.x), fabsf(a.y), fabsf(a.z)
  * exact up to its own range. A power of two scales exactly, so wherever the
  * unscaled form was finite this gives the same bits. A degenerate or
  * non-finite pair gives (0,0,0) and area 0. */
-static inline vec3 v3_unit_normal_area(vec3 a, vec3 b, float *area)
+/* frexpf's exponent of a positive finite x: x = m 2^e, m in [0.5, 1).
+ * Read off the bits for a normal x (every hit's normal comes through here,
+ * and the library call showed in profiles). */
+static inline int v3_exponent(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    int biased = (int)(bits >> 23 & 0xffu);
+    if (biased == 0) {
+        int e;
+        frexpf(x, &e);
+        return e;
+    }
+    return biased - 126;
+}
+
+/* 2^e as a float, for e in [-126, 127] (a normal float). */
+static inline float v3_pow2(int e)
+{
+    uint32_t bits = (uint32_t)(e + 127) << 23;
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/* The normal of v3_unit_normal_area and the length of the scaled cross
+ * product, *scale_exp the exponent of the scaling undone: |a x b| = l
+ * 2^(2 e). */
+static inline vec3 v3_unit_normal_scaled(vec3 a, vec3 b, float *l_out, int *scale_exp)
 {
     float big = fmaxf(fmaxf(fmaxf(fabsf(a.x), fabsf(a.y)), fmaxf(fabsf(a.z), fabsf(b.x))),
                       fmaxf(fabsf(b.y), fabsf(b.z)));
-    *area = 0.0f;
+    *l_out = 0.0f;
+    *scale_exp = 0;
     if (!(big > 0.0f) || !isfinite(big)) return v3(0.0f, 0.0f, 0.0f);
-    int e;
-    frexpf(big, &e);
+    int e = v3_exponent(big);
     /* s itself must be a normal float: a subnormal one is zero under DAZ */
     e = e > 125 ? 125 : e < -125 ? -125 : e;
-    float s = ldexpf(1.0f, -e);
+    float s = v3_pow2(-e);
     vec3 n = v3_cross(v3_scale(a, s), v3_scale(b, s));
     float l = sqrtf(v3_dot(n, n));
     if (!(l > 0.0f)) return v3(0.0f, 0.0f, 0.0f);
-    *area = ldexpf(l, 2 * e);
+    *l_out = l;
+    *scale_exp = e;
     return v3_scale(n, 1.0f / l);
+}
+
+static inline vec3 v3_unit_normal_area(vec3 a, vec3 b, float *area)
+{
+    float l;
+    int e;
+    vec3 n = v3_unit_normal_scaled(a, b, &l, &e);
+    *area = l > 0.0f ? ldexpf(l, 2 * e) : 0.0f;
+    return n;
 }
 
 static inline vec3 v3_unit_normal(vec3 a, vec3 b)
 {
-    float area;
-    return v3_unit_normal_area(a, b, &area);
+    float l;
+    int e;
+    return v3_unit_normal_scaled(a, b, &l, &e);
 }
 
 #endif
