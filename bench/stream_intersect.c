@@ -175,7 +175,8 @@ static void lay_out_soa(race *r)
     r->soa_prim = malloc(n * sizeof *r->soa_prim);
     r->hits = malloc(n * sizeof *r->hits);
     r->scratch = malloc(n * sizeof *r->scratch);
-    if (!r->soa || !r->soa_hits || !r->soa_prim || !r->hits || !r->scratch) cli_fail("study --paths: out of memory for %zu rays", n);
+    if (!r->soa || !r->soa_hits || !r->soa_prim || !r->hits || !r->scratch)
+        cli_fail("study --paths: out of memory for %zu rays", n);
     for (size_t i = 0; i < n; i++) {
         const lanes_ray *ray = &cap->rays[i];
         for (int k = 0; k < 3; k++) r->soa[(size_t)k * n + i] = ray->o[k], r->soa[(size_t)(3 + k) * n + i] = ray->d[k];
@@ -250,6 +251,7 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     run(&r, &calls[0]);
     answers(&r, &calls[0], reference);
     for (int i = 0; i < ncalls; i++) {
+        run(&r, &calls[i]); /* the two AoS calls share their hits array */
         answers(&r, &calls[i], got);
         for (size_t j = 0; j < cap.count; j++) out->api[i].differ += !same_hit(&got[j], &reference[j]);
         double s = cli_median(calls[i].seconds, (size_t)reps);

@@ -213,9 +213,8 @@ static void write_intersect_table(FILE *f, const intersect_results *ir, const ch
         const stream_intersect_result *r = &ir->at[s * ir->nsets + j];
         double base = r->apis ? r->api[0].mrays : 0.0;
         for (int a = 0; a < r->apis; a++)
-            fprintf(f, "| %s | %s%s | %.2f | %.2f | %zu |\n", lanes_isa_name(sets[j]), r->api[a].name,
-                    r->api[a].embree ? "" : " (lanes)", r->api[a].mrays, base > 0.0 ? r->api[a].mrays / base : 0.0,
-                    r->api[a].differ);
+            fprintf(f, "| %s | %s | %.2f | %.2f | %zu |\n", lanes_isa_name(sets[j]), r->api[a].name, r->api[a].mrays,
+                    base > 0.0 ? r->api[a].mrays / base : 0.0, r->api[a].differ);
     }
     fprintf(f, "\n| set | SoA call / AoS trace_wide | SoA call / AoS set-up + trace_wide | lanes' best | Embree's best (%s) | "
                "lanes / Embree |\n|---|---|---|---|---|---|\n",
@@ -227,7 +226,7 @@ static void write_intersect_table(FILE *f, const intersect_results *ir, const ch
         double soa_setup = r->apis > 2 && r->api[2].mrays > 0.0 ? r->api[1].mrays / r->api[2].mrays : 0.0;
         fprintf(f, "| %s | %.3f | %.3f | %s %.2f |", lanes_isa_name(sets[j]), soa, soa_setup, l >= 0 ? r->api[l].name : "-",
                 l >= 0 ? r->api[l].mrays : 0.0);
-        if (e >= 0)
+        if (e >= 0 && l >= 0)
             fprintf(f, " %s %.2f | %.2f |\n", r->api[e].name, r->api[e].mrays,
                     r->api[e].mrays > 0.0 ? r->api[l].mrays / r->api[e].mrays : 0.0);
         else
