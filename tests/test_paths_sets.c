@@ -241,17 +241,18 @@ static int builtin_scene(const char *name)
     lanes_error err;
     char label[160];
     snprintf(label, sizeof label, "%s+100", name);
-    if (CHECK(lanes_builtin_scene(name, &s, &err) == LANES_OK &&
-                  lanes_scene_assign_materials(&s, 100, LANES_ASSIGN_CLUSTER, &err) == LANES_OK,
-              "%s with 100 materials: %s", name, err.message)) {
+    if (!CHECK(lanes_builtin_scene(name, &s, &err) == LANES_OK, "%s: %s", name, err.message))
+        return harness_summary("test_paths_sets");
+    if (CHECK(lanes_scene_assign_materials(&s, 100, LANES_ASSIGN_CLUSTER, &err) == LANES_OK, "%s with 100 materials: %s",
+              name, err.message)) {
         for (int i = 0; i < LANES_ISA_COUNT; i++) {
             lanes_isa isa = lanes_isa_ranked()[i];
             if (!lanes_kernels_for(isa) || !lanes_isa_supported(isa)) continue;
             exact(label, &s, isa);
             utilisation_recounted(label, &s, isa);
         }
-        lanes_scene_free(&s);
     }
+    lanes_scene_free(&s);
     return harness_summary("test_paths_sets");
 }
 
