@@ -93,11 +93,8 @@ static double run(race *r, call *c)
             cap->k->trace_wide(&cap->accel->wide, LANES_ACCURACY_DEFAULT, cap->rays + begin, m, r->hits + begin, NULL);
         } else if (c->kind == CALL_AOS_SETUP) {
             for (size_t i = begin; i < end; i++) {
-                const lanes_ray *from = &cap->rays[i];
-                lanes_ray *to = &r->scratch[i];
-                *to = (lanes_ray){{from->o[0], from->o[1], from->o[2]}, {from->d[0], from->d[1], from->d[2]},
-                                  {0, 0, 0}, from->tnear, from->tfar};
-                lanes_ray_prepare_rcp(to, LANES_RCP_EXACT);
+                r->scratch[i] = cap->rays[i];
+                lanes_ray_prepare_rcp(&r->scratch[i], LANES_RCP_EXACT);
             }
             cap->k->trace_wide(&cap->accel->wide, LANES_ACCURACY_DEFAULT, r->scratch + begin, m, r->hits + begin, NULL);
         } else if (c->kind == CALL_SOA) {
@@ -184,15 +181,14 @@ static void lay_out_soa(race *r)
     }
 }
 
-void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int width, int height, int spp,
-                                    int stream, int reps, size_t max_rays, stream_intersect_result *out)
+void lanes_stream_intersect_measure(const lanes_scene *scene, const lanes_render_accel *accel, lanes_isa isa, int width,
+                                    int height, int spp, int stream, int reps, size_t max_rays,
+                                    stream_intersect_result *out)
 {
     memset(out, 0, sizeof *out);
     const lanes_kernels *k = lanes_kernels_for(isa);
-    lanes_render_accel accel;
     lanes_error err;
-    if (lanes_render_accel_build(scene, k, false, 0, &accel, &err) != LANES_OK) cli_fail("study --paths: %s", err.message);
-    capture cap = {k, &accel, NULL, 0, 0, max_rays, NULL, 0, 0, false};
+    capture cap = {k, accel, NULL, 0, 0, max_rays, NULL, 0, 0, false};
     lanes_paths_intersector x = {"capture", &cap, capture_trace, capture_occluded};
     lanes_paths_options po;
     lanes_paths_default_options(&po);
@@ -200,7 +196,7 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     po.width = width, po.height = height, po.spp = spp, po.stream = stream, po.threads = 1;
     po.intersector = &x;
     lanes_paths_result res;
-    if (lanes_paths_render(scene, &accel, &po, &res, &err) != LANES_OK) cli_fail("study --paths: %s", err.message);
+    if (lanes_paths_render(scene, accel, &po, &res, &err) != LANES_OK) cli_fail("study --paths: %s", err.message);
     lanes_paths_result_free(&res);
     if (cap.out_of_memory) cli_fail("study --paths: out of memory capturing the streams");
     out->rays = cap.count, out->streams = cap.streams;
@@ -268,5 +264,4 @@ void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int
     lanes_accel_release(r.public_accel);
     free(r.soa), free(r.soa_hits), free(r.soa_prim), free(r.hits), free(r.scratch);
     free(cap.rays), free(cap.stream_end);
-    lanes_render_accel_free(&accel);
 }

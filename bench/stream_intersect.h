@@ -21,6 +21,7 @@
 
 #include "build/scene.h"
 #include "simd/isa.h"
+#include "trace/render.h"
 
 enum { STREAM_INTERSECT_MAX_APIS = 16 };
 
@@ -39,11 +40,13 @@ typedef struct stream_intersect_result {
 } stream_intersect_result;
 
 /* Renders scene (width x height, spp, stream of `stream` paths, the
- * default accuracy, one thread) at set isa to capture its extension
- * streams (at most max_rays rays: later streams are traced but not kept),
- * then races the calls above on them, reps rounds. Exits with status 2
- * (cli_fail) on an error. */
-void lanes_stream_intersect_measure(const lanes_scene *scene, lanes_isa isa, int width, int height, int spp,
-                                    int stream, int reps, size_t max_rays, stream_intersect_result *out);
+ * default accuracy, one thread) at set isa, through accel (its wide BVH,
+ * lanes_render_accel_build), to capture its extension streams (at most
+ * max_rays rays: later streams are traced but not kept), then races the
+ * calls above on them, reps rounds. Exits with status 2 (cli_fail) on an
+ * error. */
+void lanes_stream_intersect_measure(const lanes_scene *scene, const lanes_render_accel *accel, lanes_isa isa, int width,
+                                    int height, int spp, int stream, int reps, size_t max_rays,
+                                    stream_intersect_result *out);
 
 #endif

@@ -525,8 +525,8 @@ int lanes_study_paths(const char *const *specs, int nspecs, const lanes_isa *set
         for (int j = 0; j < nsets; j++) {
             if (!o->json && isatty(2))
                 fprintf(stderr, "\r%s: the intersection stage at %s        ", scenes[s], lanes_isa_name(sets[j]));
-            lanes_stream_intersect_measure(&clustered36.scene, sets[j], o->width, o->height, o->spp, 2048, o->reps,
-                                           (size_t)1 << 22, &intersect[s * nsets + j]);
+            lanes_stream_intersect_measure(&clustered36.scene, scene_accel(&clustered36, sets[j]), sets[j], o->width,
+                                           o->height, o->spp, 2048, o->reps, (size_t)1 << 22, &intersect[s * nsets + j]);
         }
         if (!o->json && isatty(2)) fprintf(stderr, "\n");
         scene_close(&own);

@@ -18,12 +18,17 @@ static inline uint32_t lanes_hash32(uint32_t x)
     return x;
 }
 
+/* The 32 random bits of one (pixel, sample, depth, dimension). */
+static inline uint32_t lanes_random_bits(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dimension)
+{
+    return lanes_hash32(lanes_hash32(lanes_hash32(lanes_hash32(pixel) + sample) + depth) + dimension);
+}
+
 /* vf_random for one (pixel, sample, depth, dimension): in [0, 1), a
  * multiple of 2^-24. */
 static inline float lanes_random01(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dimension)
 {
-    uint32_t h = lanes_hash32(lanes_hash32(lanes_hash32(lanes_hash32(pixel) + sample) + depth) + dimension);
-    return (float)(h >> 8) * 0x1p-24f;
+    return (float)(lanes_random_bits(pixel, sample, depth, dimension) >> 8) * 0x1p-24f;
 }
 
 #endif

@@ -180,11 +180,6 @@ static void test_specials(simd_ctx *c)
 
 /* ---- random numbers ---------------------------------------------------- */
 
-static uint32_t random_bits(uint32_t pixel, uint32_t sample, uint32_t depth, uint32_t dimension)
-{
-    return lanes_hash32(lanes_hash32(lanes_hash32(lanes_hash32(pixel) + sample) + depth) + dimension);
-}
-
 static void test_random(simd_ctx *c, rng *r)
 {
     simd_begin(c, "vrandom: bits and floats equal plain C at every lane");
@@ -198,7 +193,7 @@ static void test_random(simd_ctx *c, rng *r)
         vi_storeu(bits, vi_random_bits(vp, vs, vd, vm));
         vf_storeu(u, vf_random(vp, vs, vd, vm));
         for (int i = 0; i < W; i++) {
-            uint32_t want = random_bits((uint32_t)p[i], (uint32_t)s[i], (uint32_t)d[i], (uint32_t)m[i]);
+            uint32_t want = lanes_random_bits((uint32_t)p[i], (uint32_t)s[i], (uint32_t)d[i], (uint32_t)m[i]);
             float want_u = (float)(want >> 8) * 0x1p-24f;
             if ((uint32_t)bits[i] != want) simd_fail(c, "random_bits lane %d = 0x%08x, expected 0x%08x", i, (uint32_t)bits[i], want);
             if (fbits(u[i]) != fbits(want_u)) simd_fail(c, "random lane %d = %a, expected %a", i, (double)u[i], (double)want_u);

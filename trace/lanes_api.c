@@ -530,17 +530,16 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
     const float far2 = (float)fmin(accel->max_reach * accel->max_reach, FLT_MAX);
     for (size_t first = 0; first < n; first += STREAM_CHUNK) {
         size_t m = n - first < STREAM_CHUNK ? n - first : STREAM_CHUNK;
-        if (rcp == LANES_RCP_EXACT) {
-            /* the set's SIMD set-up; the flagged rays again one at a time */
-            const float *const soa[8] = {rays->org_x + first, rays->org_y + first, rays->org_z + first,
-                                         rays->dir_x + first, rays->dir_y + first, rays->dir_z + first,
-                                         rays->tnear + first, rays->tfar + first};
-            if (d->k->rays_load_soa(soa, m, box, far2, chunk, flags) > 0)
-                for (size_t i = 0; i < m; i++)
-                    if (flags[i]) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
-        } else {
-            for (size_t i = 0; i < m; i++) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
-        }
+        /* the set's SIMD set-up in exact mode; the flagged rays, and every
+         * ray in fast mode (whose estimate the scalar path shares with
+         * lanes_intersect1), one at a time */
+        bool all = rcp != LANES_RCP_EXACT;
+        const float *const soa[8] = {rays->org_x + first, rays->org_y + first, rays->org_z + first,
+                                     rays->dir_x + first, rays->dir_y + first, rays->dir_z + first,
+                                     rays->tnear + first, rays->tfar + first};
+        if (all || d->k->rays_load_soa(soa, m, box, far2, chunk, flags) > 0)
+            for (size_t i = 0; i < m; i++)
+                if (all || flags[i]) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
         if (occluded) {
             memset(occluded + first, 0, m);
             (packets ? d->k->occluded_hybrid : d->k->occluded_wide)(&accel->wide, d->accuracy, chunk, m,

@@ -191,11 +191,18 @@ static void occluded_rays(const paths_job *job, const lanes_ray *rays, size_t n,
     else job->trace_k->occluded_wide(&job->accel->wide, job->accuracy, rays, n, occluded, NULL);
 }
 
-static lanes_hit trace(const paths_job *job, vec3 o, vec3 d, float tfar)
+/* A path's next ray, from o along d without end, prepared for tracing. */
+static lanes_ray extension_ray(const paths_job *job, vec3 o, vec3 d)
 {
-    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
-    lanes_hit h;
+    lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, INFINITY};
     lanes_ray_prepare_rcp(&r, job->rcp);
+    return r;
+}
+
+static lanes_hit trace(const paths_job *job, vec3 o, vec3 d)
+{
+    lanes_ray r = extension_ray(job, o, d);
+    lanes_hit h;
     trace_rays(job, &r, 1, &h);
     return h;
 }
@@ -424,7 +431,7 @@ static vec3 trace_path(const paths_job *job, vec3 eye, vec3 dir, uint32_t pixel,
     c->paths++;
     for (int depth = 0; depth < job->opt->depth; depth++) {
         c->by_depth[depth]++;
-        lanes_hit h = trace(job, o, d, INFINITY);
+        lanes_hit h = trace(job, o, d);
         lanes_surface sf;
         uint32_t mi;
         vec3 wo;
@@ -533,10 +540,7 @@ static void trace_packet_paths(const paths_job *job, const uint32_t *pixel, cons
         lanes_hit found[LANES_MAX_W], hits[LANES_MAX_W];
         int nr = 0;
         for (int i = 0; i < n; i++)
-            if (L[i].alive) {
-                rays[nr] = (lanes_ray){{L[i].o.x, L[i].o.y, L[i].o.z}, {L[i].d.x, L[i].d.y, L[i].d.z}, {0, 0, 0}, 0.0f, INFINITY};
-                lanes_ray_prepare_rcp(&rays[nr++], job->rcp);
-            }
+            if (L[i].alive) rays[nr++] = extension_ray(job, L[i].o, L[i].d);
         trace_rays(job, rays, (size_t)nr, found);
         for (int k = 0; k < nr; k++) prefetch_hit(job->scene, &found[k]);
         for (int i = 0, k = 0; i < n; i++)
@@ -751,8 +755,7 @@ static void stream_chunk(const paths_job *job, stream_state *st, const uint32_t 
         for (int i = 0; i < st->size; i++) {
             packet_lane *l = &st->path[i];
             if (!l->alive) continue;
-            st->rays[nr] = (lanes_ray){{l->o.x, l->o.y, l->o.z}, {l->d.x, l->d.y, l->d.z}, {0, 0, 0}, 0.0f, INFINITY};
-            lanes_ray_prepare_rcp(&st->rays[nr], job->rcp);
+            st->rays[nr] = extension_ray(job, l->o, l->d);
             st->ray_slot[nr++] = (uint32_t)i;
         }
         /* the books: every path made is finished or in flight, one slot each */

@@ -8,17 +8,32 @@
 /* x * 0 == 0 holds exactly for finite x: NaN and ±inf give NaN. */
 LANES_BODY vmask finite(vfloat x) { return vf_eq(vf_mul(x, vf_zero()), vf_zero()); }
 
-void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
+/* lanes_ray_valid on W rays: finite o and d, d != 0, no NaN end. */
+LANES_BODY vmask rays_valid(vfloat ox, vfloat oy, vfloat oz, vfloat dx, vfloat dy, vfloat dz, vfloat tnear, vfloat tfar)
 {
     const vfloat zero = vf_zero();
+    vmask ok = vm_and(finite(ox), vm_and(finite(oy), finite(oz)));
+    ok = vm_and(ok, vm_and(finite(dx), vm_and(finite(dy), finite(dz))));
+    ok = vm_and(ok, vm_not(vm_or(vf_isnan(tnear), vf_isnan(tfar))));
+    return vm_and(ok, vm_or(vf_neq(dx, zero), vm_or(vf_neq(dy, zero), vf_neq(dz, zero))));
+}
+
+/* Infinite ends become ±FLT_MAX: a slab that a d = ±0 ray never enters has
+ * both distances at the same infinity, and only finite ends keep such an
+ * empty interval from overlapping [tnear, tfar]. An invalid ray gets the
+ * empty interval [inf, -inf]. */
+LANES_BODY void rays_interval(vmask ok, vfloat *tnear, vfloat *tfar)
+{
+    *tnear = vf_select(ok, vf_max(*tnear, vf_set1(-FLT_MAX)), vf_set1(INFINITY));
+    *tfar = vf_select(ok, vf_min(*tfar, vf_set1(FLT_MAX)), vf_set1(-INFINITY));
+}
+
+void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
+{
     for (size_t i = 0; i < r->count; i += LANES_W) {
         vfloat dx = vf_load(r->dx + i), dy = vf_load(r->dy + i), dz = vf_load(r->dz + i);
-        vfloat tnear = vf_load(r->tnear + i), tfar = vf_load(r->tfar + i);
-        vmask ok = vm_and(finite(vf_load(r->ox + i)),
-                          vm_and(finite(vf_load(r->oy + i)), finite(vf_load(r->oz + i))));
-        ok = vm_and(ok, vm_and(finite(dx), vm_and(finite(dy), finite(dz))));
-        ok = vm_and(ok, vm_not(vm_or(vf_isnan(tnear), vf_isnan(tfar))));
-        ok = vm_and(ok, vm_or(vf_neq(dx, zero), vm_or(vf_neq(dy, zero), vf_neq(dz, zero))));
+        vfloat tn = vf_load(r->tnear + i), tf = vf_load(r->tfar + i);
+        vmask ok = rays_valid(vf_load(r->ox + i), vf_load(r->oy + i), vf_load(r->oz + i), dx, dy, dz, tn, tf);
         vfloat rdx, rdy, rdz;
         if (mode == LANES_RCP_FAST) {
             /* The estimate is inf for ±0 and for denormals, and the Newton
@@ -31,11 +46,7 @@ void LANES_FN(lanes_rays_prepare)(lanes_rays *r, lanes_rcp_mode mode)
         } else {
             rdx = vf_rcp(dx), rdy = vf_rcp(dy), rdz = vf_rcp(dz);
         }
-        /* Infinite ends become ±FLT_MAX: a slab that a d = ±0 ray never
-         * enters has both distances at the same infinity, and only finite
-         * ends keep such an empty interval from overlapping [tnear, tfar]. */
-        vfloat tn = vf_select(ok, vf_max(tnear, vf_set1(-FLT_MAX)), vf_set1(INFINITY));
-        vfloat tf = vf_select(ok, vf_min(tfar, vf_set1(FLT_MAX)), vf_set1(-INFINITY));
+        rays_interval(ok, &tn, &tf);
         lanes_store_below(r->rdx, i, r->count, rdx);
         lanes_store_below(r->rdy, i, r->count, rdy);
         lanes_store_below(r->rdz, i, r->count, rdz);
@@ -54,13 +65,9 @@ size_t LANES_FN(lanes_rays_load_soa)(const float *const *soa, size_t n, const fl
         vmask in = vm_first_n(here);
         vfloat v[8];
         for (int k = 0; k < 8; k++) v[k] = here == LANES_W ? vf_loadu(soa[k] + i) : vf_load_masked(in, soa[k] + i);
-        vmask ok = vm_and(finite(v[0]), vm_and(finite(v[1]), finite(v[2])));
-        ok = vm_and(ok, vm_and(finite(v[3]), vm_and(finite(v[4]), finite(v[5]))));
-        ok = vm_and(ok, vm_not(vm_or(vf_isnan(v[6]), vf_isnan(v[7]))));
-        ok = vm_and(ok, vm_or(vf_neq(v[3], zero), vm_or(vf_neq(v[4], zero), vf_neq(v[5], zero))));
-        /* as lanes_rays_prepare: finite ends, the inactive interval for an invalid ray */
-        vfloat tn = vf_select(ok, vf_max(v[6], vf_set1(-FLT_MAX)), vf_set1(INFINITY));
-        vfloat tf = vf_select(ok, vf_min(v[7], vf_set1(FLT_MAX)), vf_set1(-INFINITY));
+        vmask ok = rays_valid(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+        vfloat tn = v[6], tf = v[7];
+        rays_interval(ok, &tn, &tf);
         vmask far = vm_false();
         if (box) {
             /* each step rounds by at most 2^-24 relative, so a square
