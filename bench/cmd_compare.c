@@ -96,6 +96,7 @@ typedef struct {
      * from tnear0/tfar0 before each run (traversal shrinks tfar) */
     bool packet;
     bool hybrid; /* packets of the set's width through the wide BVH */
+    bool stream; /* occlusion: octant-sorted groups through the wide BVH */
     lanes_rays soa;
     float *tnear0, *tfar0, *u, *v;
     uint32_t *prim;
@@ -167,6 +168,10 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     const lanes_job *j = ctx;
     if (j->packet) {
         packet_work(j, b, e);
+        return;
+    }
+    if (j->stream) {
+        j->k->occluded_stream(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
         return;
     }
     if (j->hybrid) {
@@ -339,7 +344,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
 {
     bool occl = kind == KIND_SHADOW;
     size_t nn = n ? n : 1;
-    config *cfg = calloc(LANES_ISA_COUNT * (LANES_SCHEME_COUNT + 2) + 2 * LANES_EMBREE_METHOD_COUNT,
+    config *cfg = calloc(LANES_ISA_COUNT * (LANES_SCHEME_COUNT + 3) + 2 * LANES_EMBREE_METHOD_COUNT,
                          sizeof *cfg);
     lanes_embree_batch batches[LANES_EMBREE_METHOD_COUNT];
     bool have_batch[LANES_EMBREE_METHOD_COUNT] = {false};
@@ -368,6 +373,14 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
         hj.scheme = LANES_SCHEME_WIDE;
         hj.hybrid = true;
         add_lanes_config(&cfg[ncfg++], hj, "hybrid", nn, 0);
+        /* shadow rays as one stream per worker's chunk, sorted by octant
+         * inside the call (the answers are the wide scheme's) */
+        if (occl) {
+            lanes_job sj = base;
+            sj.scheme = LANES_SCHEME_WIDE;
+            sj.stream = true;
+            add_lanes_config(&cfg[ncfg++], sj, "stream", nn, 0);
+        }
         /* packets of 1024 consecutive rays (camera rays come in 8x8 pixel
          * tiles, so a packet is a strip of 16 tiles), partition traversal
          * of the BVH2 with the packet frustum built inside the clock */
@@ -439,7 +452,9 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     else
         lanes_embree_batch_hits(&batches[LANES_EMBREE_1], ref_hits);
     for (int i = 0; i < ncfg; i++) {
-        if (cfg[i].embree || cfg[i].lj.packet || cfg[i].lj.hybrid || cfg[i].lj.scheme != LANES_SCHEME_WIDE) continue;
+        if (cfg[i].embree || cfg[i].lj.packet || cfg[i].lj.hybrid || cfg[i].lj.stream ||
+            cfg[i].lj.scheme != LANES_SCHEME_WIDE)
+            continue;
         agreement *a = &c->res.agree[c->res.agree_count++];
         a->isa = cfg[i].lj.k->isa;
         a->kind = kind;
@@ -563,7 +578,8 @@ static const char usage[] =
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
-    "on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2) and\n"
+    "on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2,\n"
+    "\"stream\" = shadow rays sorted by octant in groups of 32 on the wide BVH) and\n"
     "through Embree (each of rtcIntersect1/4/8/16/1M/Np, default and coherent\n"
     "contexts; rtcOccluded* for shadow rays), on one pinned thread and on N, and\n"
     "prints Mrays/s with the ratio to the best Embree API for the same rays and\n"

@@ -1,13 +1,15 @@
 /* The traversals (trace_wide, occluded_wide, trace_bvh2, occluded_bvh2,
- * and the hybrid packets trace_hybrid, occluded_hybrid) of every supported
- * kernel set, with both triangle tests, against two references:
+ * the hybrid packets trace_hybrid, occluded_hybrid, and the occlusion
+ * stream occluded_stream) of every supported kernel set, with both
+ * triangle tests, against two references:
  *
  *  brute  (small scenes, BVHs with leaves of at most 1, 4 and 12
  *         triangles): every triangle tested with the same set's own
  *         triangle kernel (the hybrid packets also against trace_wide, on
  *         those rays and on camera rays in 4x4 pixel blocks, whose
  *         packets stay together: the same t bit for bit, the same
- *         answer to occlusion). The traversal must find exactly what the brute
+ *         answer to occlusion; the occlusion stream against
+ *         occluded_wide, the same answer for every ray). The traversal must find exactly what the brute
  *         force finds: the same t bit for bit, the same triangle unless
  *         another one is hit at exactly that t (a tie, which either may
  *         report), and occlusion iff a closest hit exists. Since both sides
@@ -552,6 +554,44 @@ static void check_hybrid(const lanes_kernels *k, const lanes_wbvh *w, lanes_accu
     free(hw), free(hh), free(ow), free(oh);
 }
 
+/* The occlusion stream against occluded_wide on the same rays: the same
+ * answer for every ray, bit for bit (each ray makes the same node and leaf
+ * tests with the same tfar; only the order of leaves differs), for the
+ * whole stream and for short ones (a lone ray, part of one group, one more
+ * than a group), and from the counting copy. */
+static void check_stream(const lanes_kernels *k, const lanes_wbvh *w, lanes_accuracy acc,
+                         const lanes_ray *rays, size_t n, const char *what)
+{
+    uint8_t *ow = malloc(n + 1), *os = malloc(n + 1);
+    if (!ow || !os) {
+        harness_fail("out of memory");
+        free(ow), free(os);
+        return;
+    }
+    k->occluded_wide(w, acc, rays, n, ow, NULL);
+    const size_t lengths[] = {n, 1, 31, 33};
+    for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
+        const size_t m = lengths[li] < n ? lengths[li] : n;
+        for (int counted = 0; counted < 2; counted++) {
+            lanes_trace_stats stats;
+            memset(&stats, 0, sizeof stats);
+            memset(os, 0xcc, n + 1);
+            k->occluded_stream(w, acc, rays, m, os, counted ? &stats : NULL);
+            size_t bad = 0, first = 0;
+            for (size_t r = 0; r < m; r++)
+                if (os[r] != ow[r] && bad++ == 0) first = r;
+            CHECK(bad == 0, "%s %s %s: occluded_stream of %zu rays (%s): %zu answers differ from "
+                  "occluded_wide, the first ray %zu (stream %d, wide %d)", what, k->name,
+                  lanes_accuracy_name(acc), m, counted ? "counting" : "plain", bad, first,
+                  os[first], ow[first]);
+            CHECK(os[m] == 0xcc, "%s %s: occluded_stream wrote past its %zu rays", what, k->name, m);
+            CHECK(!counted || stats.rays == m, "%s %s: occluded_stream counted %llu rays of %zu",
+                  what, k->name, (unsigned long long)stats.rays, m);
+        }
+    }
+    free(ow), free(os);
+}
+
 static void brute_scene(const lanes_scene *s, size_t nrays)
 {
     long fail0 = harness.failures;
@@ -671,11 +711,13 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                     }
                 }
                 check_hybrid(k, w, acc, &tris, mode_rays, nrays, s->name, &hybrid_order);
+                check_stream(k, w, acc, mode_rays, nrays, s->name);
                 for (size_t r = 0; r < ncam; r++) {
                     cam_mode[r] = cam[r];
                     lanes_ray_prepare_rcp(&cam_mode[r], lanes_accuracy_precision(acc).rcp);
                 }
                 check_hybrid(k, w, acc, &tris, cam_mode, ncam, "camera rays", &hybrid_order);
+                check_stream(k, w, acc, cam_mode, ncam, "camera rays");
             }
         }
     }

@@ -148,6 +148,17 @@
        size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
       (w, accuracy, rays, n, occluded))
 
+/* stream_kernels.c: occlusion of n prepared rays as a stream: sorted into
+ * direction octants as they come, each group of up to 32 rays of one octant
+ * walks the wide BVH together (a node's planes loaded once per group, each
+ * ray tested against all children), as Embree's rtcOccluded1M. The same
+ * answers as occluded_wide, bit for bit. */
+#define LANES_KERNELS_STREAM(X)                                                            \
+    X(COUNTED_VOID, void, occluded_stream,                                                 \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
+      (w, accuracy, rays, n, occluded))
+
 /* packet_kernels.c: one packet of rays->count (<= LANES_PACKET_MAX_RAYS)
  * prepared rays through the BVH2. Closest hit: each ray's tfar shrinks to
  * its hit distance, and prim[i], u[i], v[i] are written for rays that hit
@@ -190,6 +201,7 @@
     LANES_KERNELS_FRUSTUM(X)                                                               \
     LANES_KERNELS_TRAVERSE(X)                                                              \
     LANES_KERNELS_HYBRID(X)                                                                \
+    LANES_KERNELS_STREAM(X)                                                                \
     LANES_KERNELS_PACKET(X)                                                                \
     LANES_KERNELS_SHADE(X)
 

@@ -510,12 +510,15 @@ LANES_API lanes_status lanes_occluded1(lanes_accel accel, const lanes_ray1 *ray,
     return query_result(accel, fn, &bad);
 }
 
-/* A multiple of every set's lane count, so that chunks cut no packet. */
-#define STREAM_CHUNK 64
+/* A multiple of every set's lane count, so that chunks cut no packet, and
+ * enough rays that incoherent shadow rays fill the occlusion stream's
+ * octant groups of 32. */
+#define STREAM_CHUNK 256
 
 /* Rays through the wide BVH in chunks (the traversal takes an array):
- * closest hits into hits, or, with occluded, any hits. One at a time, or,
- * with packets, as hybrid packets of the set's lane count. */
+ * closest hits into hits, or, with occluded, any hits. Closest hits one at
+ * a time, any hits as an octant-sorted stream (the same answers); or, with
+ * packets, as hybrid packets of the set's lane count. */
 static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_rays_soa *rays,
                                size_t n, lanes_hits_soa *hits, uint8_t *occluded, bool packets)
 {
@@ -542,8 +545,8 @@ static lanes_status trace_rays(lanes_accel accel, const char *fn, const lanes_ra
                 if (all || flags[i]) chunk[i] = load_ray(accel, rays, first + i, rcp, &bad, first + i);
         if (occluded) {
             memset(occluded + first, 0, m);
-            (packets ? d->k->occluded_hybrid : d->k->occluded_wide)(&accel->wide, d->accuracy, chunk, m,
-                                                                    occluded + first, NULL);
+            (packets ? d->k->occluded_hybrid : d->k->occluded_stream)(&accel->wide, d->accuracy, chunk, m,
+                                                                      occluded + first, NULL);
         } else {
             (packets ? d->k->trace_hybrid : d->k->trace_wide)(&accel->wide, d->accuracy, chunk, m, found, NULL);
             for (size_t i = 0; i < m; i++) store_hit(hits, first + i, &found[i]);

@@ -278,8 +278,11 @@ typedef struct lanes_hits_soa {
 } lanes_hits_soa;
 
 /* A stream: n independent rays, any n (0 is allowed, and then the arrays
- * may be NULL), traced one at a time through the wide BVH. For incoherent
- * rays (diffuse bounces, shadows to many lights). */
+ * may be NULL), through the wide BVH: closest hits one ray at a time;
+ * occlusion sorted by direction octant, each group of up to 32 rays of one
+ * octant walking the tree together (as Embree's rtcOccluded1M), with the
+ * answers of one ray at a time, bitwise. For incoherent rays (diffuse
+ * bounces, shadows to many lights). */
 LANES_API lanes_status lanes_intersect_stream(lanes_accel accel, const lanes_rays_soa *rays,
                                               size_t n, lanes_hits_soa *hits);
 /* occluded[i] is 1 or 0. */

@@ -64,12 +64,6 @@ static inline uint32_t packet_live(const lanes_ray *rays, size_t m)
     return bits;
 }
 
-/* The direction octant of a ray: the signs of its 1/d, one bit per axis. */
-static inline unsigned ray_octant(const lanes_ray *r)
-{
-    return (unsigned)(r->rd[0] < 0.0f) | (unsigned)(r->rd[1] < 0.0f) << 1 | (unsigned)(r->rd[2] < 0.0f) << 2;
-}
-
 /* Whether the live rays of a group share an octant. Tested ray by ray
  * before any set-up: incoherent groups (diffuse rays) differ by the
  * second ray, so that they cost a few instructions and not a packet's

@@ -39,22 +39,36 @@ typedef struct {
     vfloat o[3], rd[3], ord[3], tnear, exit_scale;
 } node_ray;
 
+/* The slab form for ray r (see above). */
+static inline int ray_slab(const lanes_ray *r, lanes_accuracy accuracy, float exit_scale)
+{
+    if (exit_scale != 1.0f) return SLAB_ROBUST;
+    if (accuracy != LANES_ACCURACY_FAST) return SLAB_EXACT;
+    for (int a = 0; a < 3; a++)
+        if (!(fabsf(r->o[a] * r->rd[a]) <= FLT_MAX)) return SLAB_EXACT;
+    return SLAB_FMA;
+}
+
+/* The direction octant of a ray: the signs of its 1/d, one bit per axis,
+ * which pick a box's near and far planes. */
+static inline unsigned ray_octant(const lanes_ray *r)
+{
+    return (unsigned)(r->rd[0] < 0.0f) | (unsigned)(r->rd[1] < 0.0f) << 1 | (unsigned)(r->rd[2] < 0.0f) << 2;
+}
+
 LANES_BODY node_ray node_ray_setup(const lanes_ray *r, lanes_accuracy accuracy, float exit_scale, int *slab)
 {
     node_ray n;
-    bool finite = true;
     for (int a = 0; a < 3; a++) {
-        float ord = r->o[a] * r->rd[a];
-        finite = finite && fabsf(ord) <= FLT_MAX;
         n.near[a] = r->rd[a] < 0.0f ? a + 3 : a;
         n.far[a] = r->rd[a] < 0.0f ? a : a + 3;
         n.o[a] = vf_set1(r->o[a]);
         n.rd[a] = vf_set1(r->rd[a]);
-        n.ord[a] = vf_set1(ord);
+        n.ord[a] = vf_set1(r->o[a] * r->rd[a]);
     }
     n.tnear = vf_set1(r->tnear);
     n.exit_scale = vf_set1(exit_scale);
-    *slab = exit_scale != 1.0f ? SLAB_ROBUST : finite && accuracy == LANES_ACCURACY_FAST ? SLAB_FMA : SLAB_EXACT;
+    *slab = ray_slab(r, accuracy, exit_scale);
     return n;
 }
 
@@ -64,22 +78,54 @@ LANES_BODY vfloat slab_t(int slab, vfloat plane, const node_ray *r, int a)
     return vf_mul(vf_sub(plane, r->o[a]), r->rd[a]);
 }
 
+/* A node's child boxes as one ray octant sees them: per vector of LANES_W
+ * children, the near and far plane of each axis. */
+enum { NODE_VECTORS = WIDE_WIDTH / LANES_W };
+typedef struct {
+    vfloat near[NODE_VECTORS][3], far[NODE_VECTORS][3];
+} node_planes;
+
+LANES_BODY void load_planes(const float *node, const int near[3], const int far[3], node_planes *p)
+{
+    for (int c = 0; c < NODE_VECTORS; c++)
+        for (int a = 0; a < 3; a++) {
+            p->near[c][a] = vf_load(node + near[a] * WIDE_WIDTH + c * LANES_W);
+            p->far[c][a] = vf_load(node + far[a] * WIDE_WIDTH + c * LANES_W);
+        }
+}
+
+/* Lane j set: the ray enters child c * LANES_W + j before tfar; *tin its
+ * entry distances. */
+LANES_BODY vmask planes_test(const node_planes *p, const node_ray *r, int slab, vfloat tfar, int c, vfloat *tin)
+{
+    vfloat in = r->tnear, out = tfar;
+    for (int a = 0; a < 3; a++) {
+        in = vf_max(slab_t(slab, p->near[c][a], r, a), in);
+        out = vf_min(slab_t(slab, p->far[c][a], r, a), out);
+    }
+    if (slab == SLAB_ROBUST) out = vf_mul(out, r->exit_scale);
+    *tin = in;
+    return vf_le(in, out);
+}
+
 /* Bit j set: the ray enters child j before tfar; tentry[j] its entry. */
-LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, int slab, float tfar, float *tentry)
+LANES_BODY uint32_t planes_hits(const node_planes *p, const node_ray *r, int slab, float tfar, float *tentry)
 {
     uint32_t bits = 0;
     vfloat tf = vf_set1(tfar);
-    for (int j = 0; j < WIDE_WIDTH; j += LANES_W) {
-        vfloat tin = r->tnear, tout = tf;
-        for (int a = 0; a < 3; a++) {
-            tin = vf_max(slab_t(slab, vf_load(node + r->near[a] * WIDE_WIDTH + j), r, a), tin);
-            tout = vf_min(slab_t(slab, vf_load(node + r->far[a] * WIDE_WIDTH + j), r, a), tout);
-        }
-        if (slab == SLAB_ROBUST) tout = vf_mul(tout, r->exit_scale);
-        vf_storeu(tentry + j, tin);
-        bits |= vm_bits(vf_le(tin, tout)) << j;
+    for (int c = 0; c < NODE_VECTORS; c++) {
+        vfloat tin;
+        bits |= vm_bits(planes_test(p, r, slab, tf, c, &tin)) << (c * LANES_W);
+        vf_storeu(tentry + c * LANES_W, tin);
     }
     return bits;
+}
+
+LANES_BODY uint32_t node_hits(const float *node, const node_ray *r, int slab, float tfar, float *tentry)
+{
+    node_planes p;
+    load_planes(node, r->near, r->far, &p);
+    return planes_hits(&p, r, slab, tfar, tentry);
 }
 
 enum {

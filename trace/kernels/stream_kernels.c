@@ -1,0 +1,187 @@
+/* Occlusion of a ray stream through the wide BVH, written once and compiled
+ * per instruction set: the rays are sorted into their direction octants as
+ * they come, and each group of up to GROUP rays of one octant walks the
+ * tree together, as Embree's rtcOccluded1M does for incoherent rays (Wald,
+ * Benthin and Boulos 2008, "Getting rid of packets"; Tsakok 2009, MBVH/RS).
+ * A stack entry is a node and the bit set of the group's rays that entered
+ * it; at a node, each of those rays is tested against all children at once
+ * (SIMD across the children, the single-ray node test), the node's planes
+ * loaded once for the group. A ray that finds a hit leaves the group.
+ *
+ * Each ray computes what occluded_wide computes for it: the same node and
+ * leaf tests with the same tfar, which occlusion never shrinks, so it
+ * enters the same leaves and the answer is occluded_wide's, bit for bit;
+ * only the order of the leaves differs. In fast mode a ray whose o * (1/d)
+ * overflows takes the exact slab form and is traced alone. */
+#include "trace/kernels/kernel_decls.h"
+#include "trace/kernels/wide_core.h"
+
+/* Rays in a group: one bit each of a stack entry's set. Embree uses 32. */
+#define GROUP 32
+
+typedef struct {
+    uint32_t ref;  /* the node or leaf */
+    uint32_t rays; /* bit i: ray i of the group entered it */
+} group_entry;
+
+/* A group's rays, SoA for the per-ray broadcasts of the node test; the
+ * leaf test's set-up is made the first time a ray reaches a leaf. */
+typedef struct {
+    float o[3][GROUP], rd[3][GROUP], tnear[GROUP], tfar[GROUP];
+    const lanes_ray *ray[GROUP];
+    uint32_t id[GROUP];
+    int near[3], far[3];
+    wide_setup w[GROUP];
+} ray_group;
+
+/* Ray i of the group as the node test takes a ray; the compiler keeps
+ * only the broadcasts the slab form reads. */
+LANES_BODY node_ray group_ray(const ray_group *g, int i, vfloat exit_scale)
+{
+    node_ray r;
+    for (int a = 0; a < 3; a++) {
+        r.near[a] = g->near[a];
+        r.far[a] = g->far[a];
+        r.o[a] = vf_set1(g->o[a][i]);
+        r.rd[a] = vf_set1(g->rd[a][i]);
+        r.ord[a] = vf_set1(g->o[a][i] * g->rd[a][i]);
+    }
+    r.tnear = vf_set1(g->tnear[i]);
+    r.exit_scale = exit_scale;
+    return r;
+}
+
+/* Tests the group's rays in `rays` against a leaf; returns those that hit
+ * something (their occluded[] set). */
+LANES_BODY uint32_t group_leaf(const lanes_wbvh *wb, lanes_tri_algo algo, ray_group *g, uint32_t ref,
+                               uint32_t rays, uint32_t *ready, uint8_t *occluded, lanes_trace_stats *stats)
+{
+    uint32_t hit = 0;
+    for (uint32_t todo = rays; todo; todo &= todo - 1) {
+        const int i = __builtin_ctz(todo);
+        if (!(*ready & (1u << i))) {
+            wide_setup_init(&g->w[i], algo, g->ray[i], NULL);
+            *ready |= 1u << i;
+        }
+        if (stats) stats->leaves_visited++;
+        if (leaf_any(wb, algo, &g->w[i], ref, stats)) {
+            hit |= 1u << i;
+            occluded[g->id[i]] = 1;
+        }
+    }
+    return hit;
+}
+
+LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, ray_group *g, uint32_t live,
+                           uint8_t *occluded, lanes_trace_stats *stats)
+{
+    const vfloat exit_scale = vf_set1(slab == SLAB_ROBUST ? LANES_ROBUST_SCALE : 1.0f);
+    group_entry stack[STACK_SIZE];
+    int sp = 0;
+    uint32_t done = 0, ready = 0;
+    group_entry e = {0, live};
+    for (;;) {
+        const uint32_t rays = e.rays & ~done;
+        if (rays && lanes_wref_is_leaf(e.ref)) {
+            done |= group_leaf(wb, algo, g, e.ref, rays, &ready, occluded, stats);
+        } else if (rays) {
+            const float *node = (const float *)(const void *)(wb->nodes + (size_t)e.ref * NODE_BYTES);
+            const uint32_t *ref = (const uint32_t *)(const void *)(node + 6 * WIDE_WIDTH);
+            node_planes planes;
+            load_planes(node, g->near, g->far, &planes);
+            /* lane j of vector c: the rays that enter child c * LANES_W + j */
+            vint entered[NODE_VECTORS];
+            for (int c = 0; c < NODE_VECTORS; c++) entered[c] = vi_zero();
+            for (uint32_t todo = rays; todo; todo &= todo - 1) {
+                const int i = __builtin_ctz(todo);
+                const node_ray r = group_ray(g, i, exit_scale);
+                const vint bit = vi_set1((int32_t)(1u << i));
+                const vfloat tf = vf_set1(g->tfar[i]);
+                for (int c = 0; c < NODE_VECTORS; c++) {
+                    vfloat tin;
+                    vmask m = planes_test(&planes, &r, slab, tf, c, &tin);
+                    entered[c] = vi_or(entered[c], vi_select(m, bit, vi_zero()));
+                }
+                if (stats) count_node(stats, ref);
+            }
+            uint32_t child[WIDE_WIDTH];
+            for (int c = 0; c < NODE_VECTORS; c++) vi_storeu((int32_t *)child + c * LANES_W, entered[c]);
+            /* on with the first child entered, the others pushed */
+            e.rays = 0;
+            for (int j = 0; j < WIDE_WIDTH; j++) {
+                if (!child[j]) continue;
+                group_entry c = {ref[j], child[j]};
+                if (e.rays) {
+                    prefetch_child(wb, c.ref);
+                    stack[sp++] = c;
+                } else {
+                    e = c;
+                }
+            }
+            if (e.rays) continue;
+        }
+        if (sp == 0) break;
+        e = stack[--sp];
+    }
+}
+
+/* rays[id[0 .. m)], which share an octant and slab form, as one group. */
+LANES_BODY void trace_group(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, const lanes_ray *rays,
+                            const uint32_t *id, unsigned m, uint8_t *occluded, lanes_trace_stats *stats)
+{
+    ray_group g;
+    for (unsigned i = 0; i < m; i++) {
+        const lanes_ray *r = &rays[id[i]];
+        for (int a = 0; a < 3; a++) {
+            g.o[a][i] = r->o[a];
+            g.rd[a][i] = r->rd[a];
+        }
+        g.tnear[i] = r->tnear;
+        g.tfar[i] = r->tfar;
+        g.ray[i] = r;
+        g.id[i] = id[i];
+    }
+    for (int a = 0; a < 3; a++) {
+        g.near[a] = g.rd[a][0] < 0.0f ? a + 3 : a;
+        g.far[a] = g.rd[a][0] < 0.0f ? a : a + 3;
+    }
+    const uint32_t live = m == GROUP ? ~0u : (1u << m) - 1;
+    if (slab == SLAB_FMA)
+        group_walk(wb, algo, SLAB_FMA, &g, live, occluded, stats);
+    else if (slab == SLAB_ROBUST)
+        group_walk(wb, algo, SLAB_ROBUST, &g, live, occluded, stats);
+    else
+        group_walk(wb, algo, SLAB_EXACT, &g, live, occluded, stats);
+}
+
+LANES_BODY void occluded_stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays,
+                                     size_t n, uint8_t *occluded, lanes_trace_stats *stats)
+{
+    const lanes_precision prec = lanes_accuracy_precision(accuracy);
+    /* the form every ray takes but a fast-mode ray whose o * (1/d) overflows */
+    const int slab = prec.exit_scale != 1.0f              ? SLAB_ROBUST
+                     : accuracy == LANES_ACCURACY_FAST ? SLAB_FMA
+                                                       : SLAB_EXACT;
+    uint32_t bin[8][GROUP];
+    unsigned count[8] = {0};
+    for (size_t i = 0; i < n; i++) {
+        const lanes_ray *r = &rays[i];
+        occluded[i] = 0;
+        if (!(r->tnear <= r->tfar)) continue;
+        if (ray_slab(r, accuracy, prec.exit_scale) != slab) {
+            occluded[i] = wide_ray(wb, accuracy, r, true, NULL, stats);
+            continue;
+        }
+        const unsigned o = ray_octant(r);
+        bin[o][count[o]++] = (uint32_t)i;
+        if (count[o] == GROUP) {
+            trace_group(wb, prec.algo, slab, rays, bin[o], GROUP, occluded, stats);
+            count[o] = 0;
+        }
+    }
+    for (unsigned o = 0; o < 8; o++)
+        if (count[o]) trace_group(wb, prec.algo, slab, rays, bin[o], count[o], occluded, stats);
+    if (stats) stats->rays += n;
+}
+
+LANES_KERNELS_STREAM(LANES_KERNEL_ENTRY)
