@@ -96,7 +96,7 @@ typedef struct {
      * from tnear0/tfar0 before each run (traversal shrinks tfar) */
     bool packet;
     bool hybrid; /* packets of the set's width through the wide BVH */
-    bool stream; /* occlusion: octant-sorted groups through the wide BVH */
+    bool stream; /* octant-sorted groups of rays through the wide BVH */
     lanes_rays soa;
     float *tnear0, *tfar0, *u, *v;
     uint32_t *prim;
@@ -171,7 +171,10 @@ static void lanes_work(void *ctx, size_t b, size_t e)
         return;
     }
     if (j->stream) {
-        j->k->occluded_stream(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
+        if (j->occlusion)
+            j->k->occluded_stream(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
+        else
+            j->k->trace_stream(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
         return;
     }
     if (j->hybrid) {
@@ -373,14 +376,11 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
         hj.scheme = LANES_SCHEME_WIDE;
         hj.hybrid = true;
         add_lanes_config(&cfg[ncfg++], hj, "hybrid", nn, 0);
-        /* shadow rays as one stream per worker's chunk, sorted by octant
-         * inside the call (the answers are the wide scheme's) */
-        if (occl) {
-            lanes_job sj = base;
-            sj.scheme = LANES_SCHEME_WIDE;
-            sj.stream = true;
-            add_lanes_config(&cfg[ncfg++], sj, "stream", nn, 0);
-        }
+        /* one stream per worker's chunk, sorted by octant inside the call */
+        lanes_job sj = base;
+        sj.scheme = LANES_SCHEME_WIDE;
+        sj.stream = true;
+        add_lanes_config(&cfg[ncfg++], sj, "stream", nn, 0);
         /* packets of 1024 consecutive rays (camera rays come in 8x8 pixel
          * tiles, so a packet is a strip of 16 tiles), partition traversal
          * of the BVH2 with the packet frustum built inside the clock */
@@ -579,7 +579,7 @@ static const char usage[] =
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
     "on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2,\n"
-    "\"stream\" = shadow rays sorted by octant in groups of 32 on the wide BVH) and\n"
+    "\"stream\" = rays sorted by octant, in groups of 32 through the wide BVH) and\n"
     "through Embree (each of rtcIntersect1/4/8/16/1M/Np, default and coherent\n"
     "contexts; rtcOccluded* for shadow rays), on one pinned thread and on N, and\n"
     "prints Mrays/s with the ratio to the best Embree API for the same rays and\n"

@@ -1,6 +1,6 @@
 /* The traversals (trace_wide, occluded_wide, trace_bvh2, occluded_bvh2,
- * the hybrid packets trace_hybrid, occluded_hybrid, and the occlusion
- * stream occluded_stream) of every supported kernel set, with both
+ * the hybrid packets trace_hybrid, occluded_hybrid, and the streams
+ * trace_stream, occluded_stream) of every supported kernel set, with both
  * triangle tests, against two references:
  *
  *  brute  (small scenes, BVHs with leaves of at most 1, 4 and 12
@@ -8,8 +8,9 @@
  *         triangle kernel (the hybrid packets also against trace_wide, on
  *         those rays and on camera rays in 4x4 pixel blocks, whose
  *         packets stay together: the same t bit for bit, the same
- *         answer to occlusion; the occlusion stream against
- *         occluded_wide, the same answer for every ray). The traversal must find exactly what the brute
+ *         answer to occlusion but where the visiting order
+ *         decides; the occlusion stream against occluded_wide, the same
+ *         answer for every ray). The traversal must find exactly what the brute
  *         force finds: the same t bit for bit, the same triangle unless
  *         another one is hit at exactly that t (a tie, which either may
  *         report), and occlusion iff a closest hit exists. Since both sides
@@ -505,16 +506,26 @@ static bool occlusion_ok(verdict v, long b, const lanes_hit *h, bool occluded)
     return (v == V_OUTSIDE_BOX || v == V_BOX_EDGE) && occluded == (h->prim != LANES_NO_HIT);
 }
 
-/* The hybrid packets against trace_wide on the same rays: the same t bit for
- * bit, the same triangle (then also u, v bit for bit), the same occlusion,
- * except where the visiting order decides, which a packet may change: a tie
- * between leaves (another triangle at exactly that t), or a hit whose float t
- * lies outside its triangle's box, or on its boundary, so that the box is
- * culled in one order and not in the other. Such a ray is judged by the
- * brute force as in brute_scene, both answers; *explained counts them. */
-static void check_hybrid(const lanes_kernels *k, const lanes_wbvh *w, lanes_accuracy acc,
-                         const lanes_triangles *tris, const lanes_ray *rays, size_t n, const char *what,
-                         size_t *explained)
+/* A traversal that visits in its own order: closest hits and occlusion of n
+ * rays through the wide BVH, as trace_hybrid or trace_stream. */
+typedef struct {
+    const char *name;
+    void (*trace)(const lanes_wbvh *, lanes_accuracy, const lanes_ray *, size_t, lanes_hit *,
+                  lanes_trace_stats *);
+    void (*occluded)(const lanes_wbvh *, lanes_accuracy, const lanes_ray *, size_t, uint8_t *,
+                     lanes_trace_stats *);
+} reordered;
+
+/* A reordering traversal (hybrid packets, streams) against trace_wide on the
+ * same rays: the same t bit for bit, the same triangle (then also u, v bit
+ * for bit), the same occlusion, except where the visiting order decides: a
+ * tie between leaves (another triangle at exactly that t), or a hit whose
+ * float t lies outside its triangle's box, or on its boundary, so that the
+ * box is culled in one order and not in the other. Such a ray is judged by
+ * the brute force as in brute_scene, both answers; *explained counts them. */
+static void check_reordered(const lanes_kernels *k, reordered x, const lanes_wbvh *w, lanes_accuracy acc,
+                            const lanes_triangles *tris, const lanes_ray *rays, size_t n, const char *what,
+                            size_t *explained)
 {
     lanes_hit *hw = malloc(n * sizeof *hw), *hh = malloc(n * sizeof *hh);
     uint8_t *ow = malloc(n), *oh = malloc(n);
@@ -526,8 +537,8 @@ static void check_hybrid(const lanes_kernels *k, const lanes_wbvh *w, lanes_accu
     const lanes_tri_algo algo = lanes_accuracy_precision(acc).algo;
     k->trace_wide(w, acc, rays, n, hw, NULL);
     k->occluded_wide(w, acc, rays, n, ow, NULL);
-    k->trace_hybrid(w, acc, rays, n, hh, NULL);
-    k->occluded_hybrid(w, acc, rays, n, oh, NULL);
+    x.trace(w, acc, rays, n, hh, NULL);
+    x.occluded(w, acc, rays, n, oh, NULL);
     size_t bad = 0;
     for (size_t r = 0; r < n; r++) {
         bool same = memcmp(&hw[r].t, &hh[r].t, sizeof hw[r].t) == 0 && hw[r].prim == hh[r].prim &&
@@ -543,40 +554,48 @@ static void check_hybrid(const lanes_kernels *k, const lanes_wbvh *w, lanes_accu
         if (ok) {
             (*explained)++;
         } else if (++bad <= 5) {
-            harness_fail("%s %s %s: ray %zu: hybrid prim %d t=%.9g occluded %d, wide prim %d t=%.9g "
+            harness_fail("%s %s %s: ray %zu: %s prim %d t=%.9g occluded %d, wide prim %d t=%.9g "
                          "occluded %d, brute force prim %ld t=%.9g",
-                         what, k->name, lanes_accuracy_name(acc), r,
+                         what, k->name, lanes_accuracy_name(acc), r, x.name,
                          hh[r].prim == LANES_NO_HIT ? -1 : (int)hh[r].prim, hh[r].t, oh[r],
                          hw[r].prim == LANES_NO_HIT ? -1 : (int)hw[r].prim, hw[r].t, ow[r], b, bt);
         }
     }
-    if (bad > 5) harness_fail("%s %s %s: %zu rays differ in all", what, k->name, lanes_accuracy_name(acc), bad);
+    if (bad > 5)
+        harness_fail("%s %s %s: %s: %zu rays differ in all", what, k->name, lanes_accuracy_name(acc), x.name, bad);
     free(hw), free(hh), free(ow), free(oh);
 }
 
-/* The occlusion stream against occluded_wide on the same rays: the same
- * answer for every ray, bit for bit (each ray makes the same node and leaf
- * tests with the same tfar; only the order of leaves differs), for the
- * whole stream and for short ones (a lone ray, part of one group, one more
- * than a group), and from the counting copy. */
+/* The streams: occlusion against occluded_wide, the same answer for every
+ * ray bit for bit (each ray makes the same node and leaf tests with the
+ * same tfar; only the order of leaves differs), and closest hits as
+ * check_reordered, for the whole stream and for short ones (a lone ray,
+ * part of one group, one more than a group), from the plain and the
+ * counting copy, none written past its end. */
 static void check_stream(const lanes_kernels *k, const lanes_wbvh *w, lanes_accuracy acc,
-                         const lanes_ray *rays, size_t n, const char *what)
+                         const lanes_triangles *tris, const lanes_ray *rays, size_t n, const char *what,
+                         size_t *explained)
 {
     uint8_t *ow = malloc(n + 1), *os = malloc(n + 1);
-    if (!ow || !os) {
+    lanes_hit *hs = malloc((n + 1) * sizeof *hs);
+    if (!ow || !os || !hs) {
         harness_fail("out of memory");
-        free(ow), free(os);
+        free(ow), free(os), free(hs);
         return;
     }
     k->occluded_wide(w, acc, rays, n, ow, NULL);
     const size_t lengths[] = {n, 1, 31, 33};
     for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
         const size_t m = lengths[li] < n ? lengths[li] : n;
+        check_reordered(k, (reordered){"stream", k->trace_stream, k->occluded_stream}, w, acc, tris, rays, m,
+                        what, explained);
         for (int counted = 0; counted < 2; counted++) {
-            lanes_trace_stats stats;
-            memset(&stats, 0, sizeof stats);
+            lanes_trace_stats stats[2];
+            memset(stats, 0, sizeof stats);
             memset(os, 0xcc, n + 1);
-            k->occluded_stream(w, acc, rays, m, os, counted ? &stats : NULL);
+            memset(hs, 0xcc, (n + 1) * sizeof *hs);
+            k->occluded_stream(w, acc, rays, m, os, counted ? &stats[0] : NULL);
+            k->trace_stream(w, acc, rays, m, hs, counted ? &stats[1] : NULL);
             size_t bad = 0, first = 0;
             for (size_t r = 0; r < m; r++)
                 if (os[r] != ow[r] && bad++ == 0) first = r;
@@ -584,12 +603,15 @@ static void check_stream(const lanes_kernels *k, const lanes_wbvh *w, lanes_accu
                   "occluded_wide, the first ray %zu (stream %d, wide %d)", what, k->name,
                   lanes_accuracy_name(acc), m, counted ? "counting" : "plain", bad, first,
                   os[first], ow[first]);
-            CHECK(os[m] == 0xcc, "%s %s: occluded_stream wrote past its %zu rays", what, k->name, m);
-            CHECK(!counted || stats.rays == m, "%s %s: occluded_stream counted %llu rays of %zu",
-                  what, k->name, (unsigned long long)stats.rays, m);
+            const unsigned char *past = (const unsigned char *)&hs[m];
+            CHECK(os[m] == 0xcc && past[0] == 0xcc && past[sizeof *hs - 1] == 0xcc,
+                  "%s %s: a stream of %zu rays wrote past its end", what, k->name, m);
+            CHECK(!counted || (stats[0].rays == m && stats[1].rays == m),
+                  "%s %s: the streams counted %llu and %llu rays of %zu", what, k->name,
+                  (unsigned long long)stats[0].rays, (unsigned long long)stats[1].rays, m);
         }
     }
-    free(ow), free(os);
+    free(ow), free(os), free(hs);
 }
 
 static void brute_scene(const lanes_scene *s, size_t nrays)
@@ -628,7 +650,8 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
     size_t ncam = cam ? make_camera_rays(s, cam, CAM_SIDE) : 0;
 
     size_t ties = 0, outside = 0, edges = 0, hits_total = 0, checks = 0, by_kind[10] = {0};
-    size_t hybrid_order = 0; /* hybrid and wide differ where the visiting order decides */
+    /* hybrid or stream and wide differ where the visiting order decides */
+    size_t hybrid_order = 0, stream_order = 0;
     dstats ds = {0, 0, 0, 0};
     for (int i = 0; i < LANES_ISA_COUNT; i++) {
         lanes_isa isa = (lanes_isa)i;
@@ -656,11 +679,17 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
 
             for (int l = 0; l < LEAF_SIZES; l++) {
                 const lanes_wbvh *w = &wide[l][width_slot(k->wide_width)];
-                for (int scheme = 0; scheme < 3; scheme++) {
-                    const char *sn = scheme == 2 ? "hybrid" : scheme ? "bvh2" : "wide";
+                for (int scheme = 0; scheme < 4; scheme++) {
+                    static const char *const scheme_names[] = {"wide", "bvh2", "hybrid", "stream"};
+                    const char *sn = scheme_names[scheme];
                     lanes_trace_stats stats;
                     memset(&stats, 0, sizeof stats);
-                    if (scheme == 2) {
+                    if (scheme == 3) {
+                        k->trace_stream(w, acc, mode_rays, nrays, hits, NULL);
+                        k->trace_stream(w, acc, mode_rays, nrays, hits2, &stats);
+                        k->occluded_stream(w, acc, mode_rays, nrays, occ, NULL);
+                        k->occluded_stream(w, acc, mode_rays, nrays, occ2, &stats);
+                    } else if (scheme == 2) {
                         k->trace_hybrid(w, acc, mode_rays, nrays, hits, NULL);
                         k->trace_hybrid(w, acc, mode_rays, nrays, hits2, &stats);
                         k->occluded_hybrid(w, acc, mode_rays, nrays, occ, NULL);
@@ -710,26 +739,27 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                         }
                     }
                 }
-                check_hybrid(k, w, acc, &tris, mode_rays, nrays, s->name, &hybrid_order);
-                check_stream(k, w, acc, mode_rays, nrays, s->name);
+                const reordered hybrid = {"hybrid", k->trace_hybrid, k->occluded_hybrid};
+                check_reordered(k, hybrid, w, acc, &tris, mode_rays, nrays, s->name, &hybrid_order);
+                check_stream(k, w, acc, &tris, mode_rays, nrays, s->name, &stream_order);
                 for (size_t r = 0; r < ncam; r++) {
                     cam_mode[r] = cam[r];
                     lanes_ray_prepare_rcp(&cam_mode[r], lanes_accuracy_precision(acc).rcp);
                 }
-                check_hybrid(k, w, acc, &tris, cam_mode, ncam, "camera rays", &hybrid_order);
-                check_stream(k, w, acc, cam_mode, ncam, "camera rays");
+                check_reordered(k, hybrid, w, acc, &tris, cam_mode, ncam, "camera rays", &hybrid_order);
+                check_stream(k, w, acc, &tris, cam_mode, ncam, "camera rays", &stream_order);
             }
         }
     }
     printf("%-8s %6zu triangles, %zu rays: %zu traversal results checked, %zu closest hits in "
            "the brute force, %zu ties resolved to another triangle at the same t, %zu where the "
            "brute force's t lies outside its triangle's box, %zu lost on a box boundary (fast and "
-           "default modes), %zu where the hybrid packets and trace_wide differ by the visiting "
-           "order; double "
+           "default modes), %zu and %zu where the hybrid packets and the streams differ from "
+           "trace_wide by the visiting order; double "
            "reference (both algorithms): %zu differ (%zu ties, %zu in the rounding band, %zu "
            "other) -> %s\n",
            s->name, s->triangle_count, nrays, checks, hits_total, ties, outside, edges, hybrid_order,
-           ds.ties + ds.grazing + ds.other, ds.ties, ds.grazing, ds.other,
+           stream_order, ds.ties + ds.grazing + ds.other, ds.ties, ds.grazing, ds.other,
            harness.failures == fail0 && ds.other == 0 ? "ok" : "FAIL");
     if (harness.failures != fail0) {
         printf("  traversal results that differ from the brute force, by kind of ray:");

@@ -148,12 +148,17 @@
        size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
       (w, accuracy, rays, n, occluded))
 
-/* stream_kernels.c: occlusion of n prepared rays as a stream: sorted into
- * direction octants as they come, each group of up to 32 rays of one octant
- * walks the wide BVH together (a node's planes loaded once per group, each
- * ray tested against all children), as Embree's rtcOccluded1M. The same
- * answers as occluded_wide, bit for bit. */
+/* stream_kernels.c: n prepared rays as a stream: sorted into direction
+ * octants as they come, each group of up to 32 rays of one octant walks the
+ * wide BVH together (a node's planes loaded once per group, each ray tested
+ * against all children), as Embree's rtcIntersect1M / rtcOccluded1M.
+ * Occlusion: occluded_wide's answers, bit for bit. Closest hit: trace_wide's
+ * but where the visiting order decides, as for trace_hybrid. */
 #define LANES_KERNELS_STREAM(X)                                                            \
+    X(COUNTED_VOID, void, trace_stream,                                                    \
+      (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
+       size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
+      (w, accuracy, rays, n, hits))                                                        \
     X(COUNTED_VOID, void, occluded_stream,                                                 \
       (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
        size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \

@@ -1,18 +1,26 @@
-/* Occlusion of a ray stream through the wide BVH, written once and compiled
- * per instruction set: the rays are sorted into their direction octants as
+/* Ray streams through the wide BVH, written once and compiled per
+ * instruction set: the rays are sorted into their direction octants as
  * they come, and each group of up to GROUP rays of one octant walks the
- * tree together, as Embree's rtcOccluded1M does for incoherent rays (Wald,
+ * tree together, as Embree's rtcOccluded1M / rtcIntersect1M do (Wald,
  * Benthin and Boulos 2008, "Getting rid of packets"; Tsakok 2009, MBVH/RS).
  * A stack entry is a node and the bit set of the group's rays that entered
  * it; at a node, each of those rays is tested against all children at once
- * (SIMD across the children, the single-ray node test), the node's planes
- * loaded once for the group. A ray that finds a hit leaves the group.
+ * (SIMD across the children, the single-ray node test) with its own tfar,
+ * the node's planes loaded once for the group.
  *
- * Each ray computes what occluded_wide computes for it: the same node and
- * leaf tests with the same tfar, which occlusion never shrinks, so it
- * enters the same leaves and the answer is occluded_wide's, bit for bit;
- * only the order of the leaves differs. In fast mode a ray whose o * (1/d)
- * overflows takes the exact slab form and is traced alone. */
+ * Occlusion: a ray that finds a hit leaves the group. Each ray makes
+ * occluded_wide's tests with the same tfar, which occlusion never shrinks,
+ * so it enters the same leaves and the answer is occluded_wide's, bit for
+ * bit; only the order of the leaves differs.
+ *
+ * Closest hit: the children go nearest first as the group's first ray sees
+ * them, which for coherent rays is near enough every ray's order. A ray's
+ * tfar shrinks with its hits, so it is the closest hit of trace_wide but
+ * where the order decides (a tie between leaves, a hit within rounding of
+ * its box's boundary), as for hybrid packets.
+ *
+ * In fast mode a ray whose o * (1/d) overflows takes the exact slab form
+ * and is traced alone. */
 #include "trace/kernels/kernel_decls.h"
 #include "trace/kernels/wide_core.h"
 
@@ -51,12 +59,19 @@ LANES_BODY node_ray group_ray(const ray_group *g, int i, vfloat exit_scale)
     return r;
 }
 
-/* Tests the group's rays in `rays` against a leaf; returns those that hit
- * something (their occluded[] set). */
-LANES_BODY uint32_t group_leaf(const lanes_wbvh *wb, lanes_tri_algo algo, ray_group *g, uint32_t ref,
-                               uint32_t rays, uint32_t *ready, uint8_t *occluded, lanes_trace_stats *stats)
+/* Where a stream's answers go: occluded[] for any hits, else hits[]. */
+typedef struct {
+    uint8_t *occluded;
+    lanes_hit *hits;
+} stream_out;
+
+/* Tests the group's rays in `rays` against a leaf; returns those done with
+ * the tree (occlusion: those that hit something, their occluded[] set;
+ * closest hit: none, their tfar and hits[] updated). */
+LANES_BODY uint32_t group_leaf(const lanes_wbvh *wb, lanes_tri_algo algo, bool any, ray_group *g, uint32_t ref,
+                               uint32_t rays, uint32_t *ready, stream_out out, lanes_trace_stats *stats)
 {
-    uint32_t hit = 0;
+    uint32_t done = 0;
     for (uint32_t todo = rays; todo; todo &= todo - 1) {
         const int i = __builtin_ctz(todo);
         if (!(*ready & (1u << i))) {
@@ -64,16 +79,37 @@ LANES_BODY uint32_t group_leaf(const lanes_wbvh *wb, lanes_tri_algo algo, ray_gr
             *ready |= 1u << i;
         }
         if (stats) stats->leaves_visited++;
-        if (leaf_any(wb, algo, &g->w[i], ref, stats)) {
-            hit |= 1u << i;
-            occluded[g->id[i]] = 1;
+        if (!any) {
+            leaf_closest(wb, algo, &g->w[i], ref, &g->tfar[i], &out.hits[g->id[i]], stats);
+        } else if (leaf_any(wb, algo, &g->w[i], ref, stats)) {
+            done |= 1u << i;
+            out.occluded[g->id[i]] = 1;
         }
     }
-    return hit;
+    return done;
 }
 
-LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, ray_group *g, uint32_t live,
-                           uint8_t *occluded, lanes_trace_stats *stats)
+/* The children a closest-hit group enters, nearest first as the group's
+ * first ray sees them, onto the stack but the nearest, which *e becomes. */
+LANES_BODY void push_by_leader(const lanes_wbvh *wb, const uint32_t *ref, const uint32_t *child,
+                               const float *lead_tin, group_entry *stack, int *sp, group_entry *e)
+{
+    wide_entry order[WIDE_WIDTH];
+    int n = 0;
+    for (int j = 0; j < WIDE_WIDTH; j++)
+        if (child[j]) n = insert_nearest_last(order, n, (wide_entry){(uint32_t)j, lead_tin[j]});
+    e->rays = 0;
+    if (n == 0) return;
+    for (int k = 0; k < n - 1; k++) {
+        const uint32_t j = order[k].ref;
+        prefetch_child(wb, ref[j]);
+        stack[(*sp)++] = (group_entry){ref[j], child[j]};
+    }
+    *e = (group_entry){ref[order[n - 1].ref], child[order[n - 1].ref]};
+}
+
+LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, bool any, ray_group *g,
+                           uint32_t live, stream_out out, lanes_trace_stats *stats)
 {
     const vfloat exit_scale = vf_set1(slab == SLAB_ROBUST ? LANES_ROBUST_SCALE : 1.0f);
     group_entry stack[STACK_SIZE];
@@ -83,7 +119,7 @@ LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, 
     for (;;) {
         const uint32_t rays = e.rays & ~done;
         if (rays && lanes_wref_is_leaf(e.ref)) {
-            done |= group_leaf(wb, algo, g, e.ref, rays, &ready, occluded, stats);
+            done |= group_leaf(wb, algo, any, g, e.ref, rays, &ready, out, stats);
         } else if (rays) {
             const float *node = (const float *)(const void *)(wb->nodes + (size_t)e.ref * NODE_BYTES);
             const uint32_t *ref = (const uint32_t *)(const void *)(node + 6 * WIDE_WIDTH);
@@ -91,6 +127,7 @@ LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, 
             load_planes(node, g->near, g->far, &planes);
             /* lane j of vector c: the rays that enter child c * LANES_W + j */
             vint entered[NODE_VECTORS];
+            float lead_tin[WIDE_WIDTH];
             for (int c = 0; c < NODE_VECTORS; c++) entered[c] = vi_zero();
             for (uint32_t todo = rays; todo; todo &= todo - 1) {
                 const int i = __builtin_ctz(todo);
@@ -101,24 +138,31 @@ LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, 
                     vfloat tin;
                     vmask m = planes_test(&planes, &r, slab, tf, c, &tin);
                     entered[c] = vi_or(entered[c], vi_select(m, bit, vi_zero()));
+                    if (!any && todo == rays) vf_storeu(lead_tin + c * LANES_W, tin);
                 }
                 if (stats) count_node(stats, ref);
             }
             uint32_t child[WIDE_WIDTH];
             for (int c = 0; c < NODE_VECTORS; c++) vi_storeu((int32_t *)child + c * LANES_W, entered[c]);
-            /* on with the first child entered, the others pushed */
-            e.rays = 0;
-            for (int j = 0; j < WIDE_WIDTH; j++) {
-                if (!child[j]) continue;
-                group_entry c = {ref[j], child[j]};
-                if (e.rays) {
-                    prefetch_child(wb, c.ref);
-                    stack[sp++] = c;
-                } else {
-                    e = c;
+            if (!any) {
+                push_by_leader(wb, ref, child, lead_tin, stack, &sp, &e);
+                if (e.rays) continue;
+            } else {
+                /* any hit will do: on with the first child entered, the
+                 * others pushed */
+                e.rays = 0;
+                for (int j = 0; j < WIDE_WIDTH; j++) {
+                    if (!child[j]) continue;
+                    group_entry c = {ref[j], child[j]};
+                    if (e.rays) {
+                        prefetch_child(wb, c.ref);
+                        stack[sp++] = c;
+                    } else {
+                        e = c;
+                    }
                 }
+                if (e.rays) continue;
             }
-            if (e.rays) continue;
         }
         if (sp == 0) break;
         e = stack[--sp];
@@ -126,8 +170,8 @@ LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, 
 }
 
 /* rays[id[0 .. m)], which share an octant and slab form, as one group. */
-LANES_BODY void trace_group(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, const lanes_ray *rays,
-                            const uint32_t *id, unsigned m, uint8_t *occluded, lanes_trace_stats *stats)
+LANES_BODY void trace_group(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, bool any, const lanes_ray *rays,
+                            const uint32_t *id, unsigned m, stream_out out, lanes_trace_stats *stats)
 {
     ray_group g;
     for (unsigned i = 0; i < m; i++) {
@@ -147,15 +191,17 @@ LANES_BODY void trace_group(const lanes_wbvh *wb, lanes_tri_algo algo, int slab,
     }
     const uint32_t live = m == GROUP ? ~0u : (1u << m) - 1;
     if (slab == SLAB_FMA)
-        group_walk(wb, algo, SLAB_FMA, &g, live, occluded, stats);
+        group_walk(wb, algo, SLAB_FMA, any, &g, live, out, stats);
     else if (slab == SLAB_ROBUST)
-        group_walk(wb, algo, SLAB_ROBUST, &g, live, occluded, stats);
+        group_walk(wb, algo, SLAB_ROBUST, any, &g, live, out, stats);
     else
-        group_walk(wb, algo, SLAB_EXACT, &g, live, occluded, stats);
+        group_walk(wb, algo, SLAB_EXACT, any, &g, live, out, stats);
 }
 
-LANES_BODY void occluded_stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays,
-                                     size_t n, uint8_t *occluded, lanes_trace_stats *stats)
+/* Both streams: the rays binned by octant, each bin traced when full and
+ * what is left at the end. */
+LANES_BODY void stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays, size_t n,
+                            bool any, stream_out out, lanes_trace_stats *stats)
 {
     const lanes_precision prec = lanes_accuracy_precision(accuracy);
     /* the form every ray takes but a fast-mode ray whose o * (1/d) overflows */
@@ -166,22 +212,38 @@ LANES_BODY void occluded_stream_body(const lanes_wbvh *wb, lanes_accuracy accura
     unsigned count[8] = {0};
     for (size_t i = 0; i < n; i++) {
         const lanes_ray *r = &rays[i];
-        occluded[i] = 0;
+        if (any)
+            out.occluded[i] = 0;
+        else
+            out.hits[i] = (lanes_hit){INFINITY, 0.0f, 0.0f, LANES_NO_HIT};
         if (!(r->tnear <= r->tfar)) continue;
         if (ray_slab(r, accuracy, prec.exit_scale) != slab) {
-            occluded[i] = wide_ray(wb, accuracy, r, true, NULL, stats);
+            bool hit = wide_ray(wb, accuracy, r, any, any ? NULL : &out.hits[i], stats);
+            if (any) out.occluded[i] = hit;
             continue;
         }
         const unsigned o = ray_octant(r);
         bin[o][count[o]++] = (uint32_t)i;
         if (count[o] == GROUP) {
-            trace_group(wb, prec.algo, slab, rays, bin[o], GROUP, occluded, stats);
+            trace_group(wb, prec.algo, slab, any, rays, bin[o], GROUP, out, stats);
             count[o] = 0;
         }
     }
     for (unsigned o = 0; o < 8; o++)
-        if (count[o]) trace_group(wb, prec.algo, slab, rays, bin[o], count[o], occluded, stats);
+        if (count[o]) trace_group(wb, prec.algo, slab, any, rays, bin[o], count[o], out, stats);
     if (stats) stats->rays += n;
+}
+
+LANES_BODY void trace_stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays,
+                                  size_t n, lanes_hit *hits, lanes_trace_stats *stats)
+{
+    stream_body(wb, accuracy, rays, n, false, (stream_out){NULL, hits}, stats);
+}
+
+LANES_BODY void occluded_stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const lanes_ray *rays,
+                                     size_t n, uint8_t *occluded, lanes_trace_stats *stats)
+{
+    stream_body(wb, accuracy, rays, n, true, (stream_out){occluded, NULL}, stats);
 }
 
 LANES_KERNELS_STREAM(LANES_KERNEL_ENTRY)
