@@ -204,10 +204,7 @@ LANES_BODY void stream_body(const lanes_wbvh *wb, lanes_accuracy accuracy, const
                             bool any, stream_out out, lanes_trace_stats *stats)
 {
     const lanes_precision prec = lanes_accuracy_precision(accuracy);
-    /* the form every ray takes but a fast-mode ray whose o * (1/d) overflows */
-    const int slab = prec.exit_scale != 1.0f              ? SLAB_ROBUST
-                     : accuracy == LANES_ACCURACY_FAST ? SLAB_FMA
-                                                       : SLAB_EXACT;
+    const int slab = mode_slab(accuracy, prec.exit_scale);
     uint32_t bin[8][GROUP];
     unsigned count[8] = {0};
     for (size_t i = 0; i < n; i++) {

@@ -39,11 +39,18 @@ typedef struct {
     vfloat o[3], rd[3], ord[3], tnear, exit_scale;
 } node_ray;
 
+/* The slab form of an accuracy mode: every ray's but a fast-mode ray whose
+ * o * (1/d) overflows. */
+static inline int mode_slab(lanes_accuracy accuracy, float exit_scale)
+{
+    return exit_scale != 1.0f ? SLAB_ROBUST : accuracy == LANES_ACCURACY_FAST ? SLAB_FMA : SLAB_EXACT;
+}
+
 /* The slab form for ray r (see above). */
 static inline int ray_slab(const lanes_ray *r, lanes_accuracy accuracy, float exit_scale)
 {
-    if (exit_scale != 1.0f) return SLAB_ROBUST;
-    if (accuracy != LANES_ACCURACY_FAST) return SLAB_EXACT;
+    const int slab = mode_slab(accuracy, exit_scale);
+    if (slab != SLAB_FMA) return slab;
     for (int a = 0; a < 3; a++)
         if (!(fabsf(r->o[a] * r->rd[a]) <= FLT_MAX)) return SLAB_EXACT;
     return SLAB_FMA;
