@@ -770,7 +770,8 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         printf("build:    lanes BVH2 %.2f ms", c->bvh2.build_seconds * 1e3);
         for (int s = 0; s < 3; s++)
             if (c->wide[s].width)
-                printf(", %d-wide %.2f ms", c->wide[s].width, c->wide[s].build_seconds * 1e3);
+                printf(", %d-wide %.2f ms (collapse %.2f)", c->wide[s].width, c->wide[s].build_seconds * 1e3,
+                       c->wide[s].collapse_seconds * 1e3);
         printf("; Embree commit %.2f ms (%d thread%s)\n", eb * 1e3, o->threads,
                o->threads == 1 ? "" : "s");
         printf("          lanes/Embree build time:");
@@ -784,9 +785,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         for (int s = 0; s < 3; s++) {
             lanes_bvh_stats st;
             if (!c->wide[s].width || !lanes_wbvh_stats(&c->wide[s], 1.0f, 1.0f, &st)) continue;
-            printf("; lanes %d-wide %.1f B/triangle (%.2fx), %.1f children/node, leaf blocks %.0f%% full",
+            printf("; lanes %d-wide %.1f B/triangle (%.2fx), %.1f children/node, leaf blocks %.0f%% full, "
+                   "SAH cost %.3f",
                    c->wide[s].width, (double)st.bytes / tris, (double)st.bytes / lanes_embree_bvh_bytes(c->embree),
-                   st.avg_children, 100.0 * st.block_fill);
+                   st.avg_children, 100.0 * st.block_fill, st.sah_cost);
         }
         printf("\n");
         fflush(stdout);

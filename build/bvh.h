@@ -140,13 +140,16 @@ static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t blo
     return (const uint32_t *)(const void *)(w->shared_verts ? b : b + 36 * (size_t)w->width);
 }
 
-/* Collapses by repeatedly replacing the child with the largest surface area
- * by its own children until `width` are present (SAH-guided collapse).
- * Each leaf slot holds one BVH2 leaf's triangles, in blocks. Ties go to the
- * earlier slot; the two children of an opened node take its slot and the next, so slots keep the
- * BVH2's left-to-right order, and empty slots come last. The interior
- * children of a wide node have consecutive indices, greater than its own;
- * the root is node 0. A BVH2 whose root is a leaf gives one wide node
+/* Collapses optimally: of all the wide trees whose nodes are cuts of the
+ * BVH2 of at most `width` slots and whose leaves are the BVH2's leaves, the
+ * one of least lanes_wbvh_sah cost (with the BVH2's costs), found by
+ * dynamic programming over the BVH2 (Ylitie et al. 2017) in time
+ * O(nodes * width^2) and about nodes * (9 * width + 8) bytes of scratch.
+ * Each leaf slot holds one BVH2 leaf's triangles, in blocks. Ties open the
+ * node rather than keep it; slots keep the BVH2's left-to-right order, and
+ * empty slots come last. The interior children of a wide node have
+ * consecutive indices, greater than its own; the root is node 0. A BVH2
+ * whose root is a leaf gives one wide node
  * holding that leaf in slot 0. Fails on a leaf that would span more than
  * LANES_WLEAF_MAX_BLOCKS blocks (max_leaf_size above 16 * width). */
 lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err);

@@ -1,13 +1,11 @@
-/* Wide BVHs collapsed from the binary one (the MBVH collapse of Dammertz
- * et al. 2008; Embree's wide builders pick the child to split next the
- * same way): a wide node starts from the two children of a BVH2 node and
- * opens the interior child of largest surface area, the one a random ray is
- * most likely to enter, until it has `width` children or only leaves
- * remain. Greedy top-down opening leaves the nodes near the leaves part
- * empty (a BVH2 node with two leaf children becomes a wide node of two);
- * lanes_wbvh_stats reports the fill.
+/* Wide BVHs collapsed from the binary one: each wide node is a cut of
+ * the BVH2 below one of its nodes, chosen by the optimal cost-based
+ * collapse below (plan_collapse). The greedy collapse of Dammertz et al.
+ * 2008 (open the child of largest area until the node is full) fills the
+ * top nodes and leaves those near the leaves part empty; the optimal one
+ * takes the same BVH2 and minimises the wide tree's SAH cost exactly.
  *
- * Two passes: the first decides the slots of every node (which BVH2 node
+ * Then two passes: the first decides the slots of every node (which BVH2 node
  * each slot holds) and the leaf blocks of every leaf slot, in the order the
  * walk meets them, so that a node's leaves lie next to each other and the
  * node and block counts are known before anything is allocated; the second
@@ -163,6 +161,117 @@ static void fill_block(void *ctx, size_t item, int tid)
     f->sah[item] = sah;
 }
 
+/* The optimal collapse (the dynamic programme of Ylitie, Karras and Laine
+ * 2017, without their leaf merging: the wide tree keeps the BVH2's leaves,
+ * whose sizes the BVH2's SAH already chose per block). For a BVH2 node n
+ * and i = 1 .. width, cost(n, i) is the least SAH cost (unnormalised, as
+ * lanes_wbvh_sah counts it) of the subtree under n when it may take up to i
+ * slots of its parent wide node:
+ *   a leaf:     intersect_cost * blocks * A(n), for every i;
+ *   interior:   split(n, j) = min over k of cost(left, k) + cost(right, j - k),
+ *               cost(n, 1)  = traversal_cost * A(n) + split(n, width)
+ *                             (n becomes a wide node of its own),
+ *               cost(n, i)  = min(cost(n, 1), split(n, i)) for i >= 2.
+ * The root is a wide node: split(root, width). Greedy opening by surface
+ * area spends a wide node's slots on its largest children and leaves the
+ * nodes below part empty; this spends them where they save the most. Ties open the node (fewer, fuller wide nodes), and
+ * the first k wins. */
+typedef struct collapse_plan {
+    const lanes_bvh2_node *nodes;
+    size_t width;
+    double *cost;    /* cost(n, i) at [n * width + i - 1] */
+    uint8_t *split;  /* [n * width]: the k of split(n, width), n's own node;
+                      * [n * width + i - 1], i >= 2: 0 when cost(n, i) is
+                      * cost(n, 1), else the k of split(n, i) */
+} collapse_plan;
+
+static void plan_free(collapse_plan *p)
+{
+    free(p->cost);
+    free(p->split);
+    p->cost = NULL;
+    p->split = NULL;
+}
+
+static bool plan_collapse(const lanes_bvh2 *bvh, size_t W, collapse_plan *p, const char **why)
+{
+    const lanes_bvh2_node *nd = bvh->nodes;
+    const size_t nn = bvh->node_count;
+    const double ct = bvh->traversal_cost, ci = bvh->intersect_cost;
+    p->nodes = nd;
+    p->width = W;
+    p->cost = lanes_big_alloc(nn * W, sizeof *p->cost);
+    p->split = lanes_big_alloc(nn * W, sizeof *p->split);
+    uint32_t *order = lanes_big_alloc(nn, sizeof *order);
+    uint32_t *stack = lanes_big_alloc(nn + 1, sizeof *stack);
+    bool ok = p->cost && p->split && order && stack;
+    *why = "out of memory";
+    size_t n_order = 0, sp = 0;
+    if (ok) stack[sp++] = 0;
+    while (ok && sp > 0) {
+        uint32_t n = stack[--sp];
+        if (n_order == nn) {
+            ok = false;
+            *why = "malformed BVH2: a node reached twice";
+            break;
+        }
+        order[n_order++] = n;
+        if (nd[n].count > 0) continue;
+        if (nd[n].first >= nn - 1) {
+            ok = false;
+            *why = "malformed BVH2: child index out of range";
+            break;
+        }
+        stack[sp++] = nd[n].first + 1;
+        stack[sp++] = nd[n].first;
+    }
+    for (size_t o = n_order; ok && o-- > 0;) {
+        const size_t n = order[o];
+        double *c = p->cost + n * W;
+        uint8_t *sk = p->split + n * W;
+        if (nd[n].count > 0) {
+            double leaf = ci * (double)((nd[n].count + W - 1) / W) * node_area(&nd[n]);
+            for (size_t i = 0; i < W; i++) c[i] = leaf, sk[i] = 0;
+            continue;
+        }
+        const double *cl = p->cost + (size_t)nd[n].first * W, *cr = cl + W;
+        double split[17];
+        uint8_t best_k[17];
+        for (size_t j = 2; j <= W; j++) {
+            split[j] = INFINITY;
+            best_k[j] = 1;
+            for (size_t k = 1; k < j; k++) {
+                double v = cl[k - 1] + cr[j - k - 1];
+                if (v < split[j]) split[j] = v, best_k[j] = (uint8_t)k;
+            }
+        }
+        c[0] = ct * node_area(&nd[n]) + split[W];
+        sk[0] = best_k[W];
+        for (size_t i = 2; i <= W; i++) {
+            bool open = split[i] <= c[0];
+            c[i - 1] = open ? split[i] : c[0];
+            sk[i - 1] = open ? best_k[i] : 0;
+        }
+    }
+    free(order);
+    free(stack);
+    if (!ok) plan_free(p);
+    return ok;
+}
+
+/* Appends the slots the plan gives BVH2 node n when it may take up to i. */
+static void plan_slots(const collapse_plan *p, uint32_t n, int i, uint32_t *s, int *m)
+{
+    const lanes_bvh2_node *nd = &p->nodes[n];
+    int k = i >= 2 && nd->count == 0 ? p->split[(size_t)n * p->width + (size_t)i - 1] : 0;
+    if (k == 0) {
+        s[(*m)++] = n;
+        return;
+    }
+    plan_slots(p, nd->first, k, s, m);
+    plan_slots(p, nd->first + 1, i - k, s, m);
+}
+
 lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *out, lanes_error *err)
 {
     double t0 = now_seconds();
@@ -173,6 +282,12 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
     const lanes_bvh2_node *nd = bvh->nodes;
     const size_t nn = bvh->node_count;
     const size_t W = (size_t)width;
+
+    /* Pass 0: the optimal cut of every subtree, children before parents
+     * (reverse preorder). */
+    collapse_plan plan;
+    const char *why = "out of memory";
+    bool ok = plan_collapse(bvh, W, &plan, &why);
 
     /* Pass 1. roots[i]: the BVH2 node wide node i stands for; slot[i*W+j]:
      * the BVH2 node in slot j (UINT32_MAX: empty); wchild: the wide index
@@ -188,8 +303,7 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
     uint32_t *stack = lanes_big_alloc(cap, sizeof *stack);
     uint32_t *slot = lanes_big_alloc(cap * W, sizeof *slot);
     uint32_t *wchild = lanes_big_alloc(cap * W, sizeof *wchild);
-    bool ok = roots && stack && slot && wchild;
-    const char *why = "out of memory";
+    ok = ok && roots && stack && slot && wchild;
     size_t count = 1, sp = 0, blocks = 0;
     if (ok) {
         roots[0] = 0;
@@ -199,45 +313,14 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
         size_t i = stack[--sp];
         size_t first_new = count;
         uint32_t s[16];
-        double area[16]; /* of interior slots; -1 for leaves */
         int m = 0;
         const lanes_bvh2_node *r = &nd[roots[i]];
         if (r->count > 0) {
             s[m++] = roots[i];
         } else {
-            if (r->first >= nn - 1) {
-                ok = false;
-                why = "malformed BVH2: child index out of range";
-                break;
-            }
-            for (int j = 0; j < 2; j++) {
-                s[m] = r->first + (uint32_t)j;
-                area[m] = nd[s[m]].count > 0 ? -1.0 : node_area(&nd[s[m]]);
-                m++;
-            }
-            while (m < width) {
-                int best = -1;
-                double best_area = -1.0;
-                for (int j = 0; j < m; j++)
-                    if (area[j] > best_area) {
-                        best_area = area[j];
-                        best = j;
-                    }
-                if (best < 0) break;
-                uint32_t o = s[best];
-                if (nd[o].first >= nn - 1) {
-                    ok = false;
-                    why = "malformed BVH2: child index out of range";
-                    break;
-                }
-                memmove(&s[best + 2], &s[best + 1], (size_t)(m - best - 1) * sizeof s[0]);
-                memmove(&area[best + 2], &area[best + 1], (size_t)(m - best - 1) * sizeof area[0]);
-                for (int j = 0; j < 2; j++) {
-                    s[best + j] = nd[o].first + (uint32_t)j;
-                    area[best + j] = nd[s[best + j]].count > 0 ? -1.0 : node_area(&nd[s[best + j]]);
-                }
-                m++;
-            }
+            int k = plan.split[(size_t)roots[i] * W];
+            plan_slots(&plan, r->first, k, s, &m);
+            plan_slots(&plan, r->first + 1, width - k, s, &m);
         }
         for (int j = 0; ok && j < width; j++) {
             size_t k = i * W + (size_t)j;
@@ -306,6 +389,7 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
     free(stack);
     free(slot);
     free(wchild);
+    plan_free(&plan);
     if (!ok) {
         lanes_wbvh_free(out);
         return fail(err, why);
