@@ -266,6 +266,7 @@ typedef struct {
     lanes_isa isa;
     lanes_accuracy accuracy; /* of every lanes configuration */
     double scale, translate; /* the scene moved: p' = scale p + translate */
+    int node_width;          /* 0: each set's own */
 } options;
 
 typedef struct {
@@ -286,6 +287,12 @@ typedef struct {
 } compare;
 
 static int width_slot(int w) { return w == 4 ? 0 : w == 8 ? 1 : 2; }
+
+/* A measured set's kernels, for the node width asked for. */
+static const lanes_kernels *set_kernels(const compare *c, lanes_isa isa)
+{
+    return c->opt.node_width ? lanes_kernels_for_width(isa, c->opt.node_width) : lanes_kernels_for(isa);
+}
 
 /* On stderr, so that stdout holds only the table (or the JSON). */
 static void progress(const compare *c, const char *fmt, ...) CLI_PRINTF(2, 3);
@@ -362,7 +369,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     c->ray_count[kind] = n;
 
     for (int ii = 0; ii < c->isa_count; ii++) {
-        const lanes_kernels *k = lanes_kernels_for(c->isas[ii]);
+        const lanes_kernels *k = set_kernels(c, c->isas[ii]);
         const lanes_job base = {.k = k, .bvh2 = &c->bvh2, .wide = &c->wide[width_slot(k->wide_width)],
                                 .rays = mode_rays, .accuracy = c->opt.accuracy, .occlusion = occl};
         for (int sc = 0; sc < LANES_SCHEME_COUNT; sc++) {
@@ -531,6 +538,7 @@ static void print_json(const compare *c, double embree_build)
     printf(",\n  \"embree_isa\": ");
     cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
     printf(",\n  \"accuracy\": \"%s\"", lanes_accuracy_name(c->opt.accuracy));
+    printf(",\n  \"node_width\": %d", c->opt.node_width);
     printf(",\n  \"scale\": ");
     cli_json_number(stdout, c->opt.scale);
     printf(",\n  \"translate\": ");
@@ -574,7 +582,8 @@ static void print_json(const compare *c, double embree_build)
 static const char usage[] =
     "usage: lanes compare [SCENE] [--isa NAME] [--embree-isa NAME] [--threads N]\n"
     "                     [--rays N] [--reps N] [--accuracy M] [--scale S]\n"
-    "                     [--translate T] [--csv FILE] [--json] [--quick]\n"
+    "                     [--translate T] [--node-width N] [--csv FILE] [--json]\n"
+    "                     [--quick]\n"
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
@@ -601,6 +610,9 @@ static const char usage[] =
     "  --translate T      origin, then moved by T along every axis (default 1, 0):\n"
     "                     the same rays' numerical difficulty at another scale and\n"
     "                     distance from the origin\n"
+    "  --node-width N     every set on wide BVHs of N children (4, 8, 16; default:\n"
+    "                     each set's own); a set traverses node widths from its\n"
+    "                     lane count up: the sets that cannot are left out\n"
     "  --csv FILE         also write the table rows to FILE\n"
     "  --json             one JSON object on stdout instead of the table\n"
     "  --quick            16384 camera rays, 2 repetitions (a smoke test)\n"
@@ -668,6 +680,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             o->scale = cli_parse_real(&a, "--scale", v, 1e-30, 1e30);
         } else if (cli_value(&a, "--translate", &v)) {
             o->translate = cli_parse_real(&a, "--translate", v, -1e30, 1e30);
+        } else if (cli_value(&a, "--node-width", &v)) {
+            o->node_width = (int)cli_parse_count(&a, "--node-width", v, 4, 16);
+            if (o->node_width != 4 && o->node_width != 8 && o->node_width != 16)
+                cli_usage_error(ctx, self, "--node-width: %s is not 4, 8 or 16", v);
         } else if (cli_value(&a, "--reps", &v)) {
             o->reps = (int)cli_parse_count(&a, "--reps", v, 1, 64);
         } else if (cli_value(&a, "--embree-isa", &v)) {
@@ -717,6 +733,13 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     for (int i = LANES_ISA_COUNT - 1; i >= 0; i--) {
         lanes_isa isa = ranked[i];
         bool want = o->isa_given ? isa == o->isa : lanes_isa_supported(isa) && below_cap;
+        if (want && o->node_width && !lanes_kernels_for_width(isa, o->node_width)) {
+            if (o->isa_given)
+                cli_fail("compare: --node-width %d: the %s set (%d lanes) traverses nodes of %d children or more",
+                         o->node_width, lanes_isa_name(isa), lanes_isa_lanes(isa),
+                         lanes_kernels_for(isa)->wide_width);
+            want = false;
+        }
         if (want) c->isas[c->isa_count++] = isa;
         if (isa == cap) below_cap = false;
     }
@@ -739,7 +762,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         for (int i = 0; i < c->isa_count; i++)
             printf("%s%s (%d lane%s, %d-wide BVH)", i ? ", " : "", lanes_isa_name(c->isas[i]),
                    lanes_isa_lanes(c->isas[i]), lanes_isa_lanes(c->isas[i]) == 1 ? "" : "s",
-                   lanes_kernels_for(c->isas[i])->wide_width);
+                   set_kernels(c, c->isas[i])->wide_width);
         printf(", accuracy %s", lanes_accuracy_name(o->accuracy));
         printf("\nembree:   %s, ISA %s\n", RTC_VERSION_STRING, lanes_embree_isa_name(o->embree_isa));
         printf("scene:    %s (%zu triangles", c->scene.name[0] ? c->scene.name : o->scene_spec,
@@ -759,7 +782,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         cli_fail("compare: %s", err.message);
     bool need[3] = {false, false, false};
     for (int i = 0; i < c->isa_count; i++)
-        need[width_slot(lanes_kernels_for(c->isas[i])->wide_width)] = true;
+        need[width_slot(set_kernels(c, c->isas[i])->wide_width)] = true;
     for (int s = 0; s < 3; s++)
         if (need[s] && lanes_wbvh_build(&c->scene, 4 << s, &bo, &c->wide[s], &err) != LANES_OK)
             cli_fail("compare: %s", err.message);
@@ -814,8 +837,8 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     lanes_hit *phits = malloc(np * sizeof *phits);
     if (!primary || !phits) cli_fail("compare: out of memory for %zu rays", np);
     {
-        lanes_job job = {.k = lanes_kernels_for(c->ref_isa), .scheme = LANES_SCHEME_WIDE, .bvh2 = &c->bvh2,
-                         .wide = &c->wide[width_slot(lanes_kernels_for(c->ref_isa)->wide_width)],
+        lanes_job job = {.k = set_kernels(c, c->ref_isa), .scheme = LANES_SCHEME_WIDE, .bvh2 = &c->bvh2,
+                         .wide = &c->wide[width_slot(set_kernels(c, c->ref_isa)->wide_width)],
                          .rays = primary, .hits = phits};
         pool_run(&c->pools[c->pool_count - 1], lanes_work, &job, np);
     }

@@ -39,6 +39,7 @@ typedef struct {
     char scheme[40];
     char isa[16];
     int lanes;
+    int node_width;  /* the wide schemes' tree; 0 for the others */
     char family[16]; /* instruction-set family (Embree rows: "embree") */
     int emulated;    /* 1: the width is made of narrower vectors */
     char queue[8];
@@ -191,8 +192,9 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
     progress(what);
 }
 
+/* node_width 0: the set's own; else the width sweep's row ("wide-nodes"). */
 static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,
-                           lanes_isa isa, lanes_scheme scheme, const study_plan *plan)
+                           lanes_isa isa, lanes_scheme scheme, int node_width, const study_plan *plan)
 {
     lanes_packet_render_options po;
     lanes_packet_render_default_options(&po);
@@ -202,15 +204,21 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
     po.base.width = plan->width;
     po.base.height = plan->height;
     po.base.threads = plan->threads;
+    po.base.node_width = node_width;
     uint64_t rays = 0;
     double seconds = timed(scene, accel, false, &po, plan, &rays);
     study_row *all = add_row(rows);
-    fill_common(all, scene, "all", lanes_scheme_name(scheme), isa, "none", 0, 1);
+    fill_common(all, scene, "all", node_width ? "wide-nodes" : lanes_scheme_name(scheme), isa, "none", 0, 1);
+    if (scheme == LANES_SCHEME_WIDE) all->node_width = accel->wide.width;
     all->seconds = seconds;
     all->mrays = (double)rays / seconds * 1e-6;
     all->ray_count = (double)rays;
     char what[160];
-    snprintf(what, sizeof what, "%s: %s at %s", scene->name, lanes_scheme_name(scheme), lanes_isa_name(isa));
+    if (scheme == LANES_SCHEME_WIDE)
+        snprintf(what, sizeof what, "%s: wide at %s, %d-wide nodes", scene->name, lanes_isa_name(isa),
+                 accel->wide.width);
+    else
+        snprintf(what, sizeof what, "%s: %s at %s", scene->name, lanes_scheme_name(scheme), lanes_isa_name(isa));
     progress(what);
 }
 
@@ -321,7 +329,7 @@ static void write_csv(const char *path, const row_list *rows)
 {
     FILE *f = cli_create_file("study", path);
     fprintf(f, "scene,rays,scheme,isa,lanes,queue,queue_min,packet,util_op,util_packet,seconds,mrays,"
-               "ray_count,packets,live_rays_per_node,live_rays_per_leaf,family,emulated\n");
+               "ray_count,packets,live_rays_per_node,live_rays_per_leaf,family,emulated,node_width\n");
     for (size_t i = 0; i < rows->n; i++) {
         const study_row *r = &rows->rows[i];
         fprintf(f, "%s,%s,%s,%s,%d,%s,%d,%d,", r->scene, r->rays, r->scheme, r->isa, r->lanes, r->queue,
@@ -332,7 +340,7 @@ static void write_csv(const char *path, const row_list *rows)
             if (k) fputc(',', f);
             csv_number(f, v[k]);
         }
-        fprintf(f, ",%s,%d\n", r->family, r->emulated);
+        fprintf(f, ",%s,%d,%d\n", r->family, r->emulated, r->node_width);
     }
     cli_finish_file("study", path, f);
 }
@@ -357,7 +365,7 @@ static void write_json(FILE *f, const row_list *rows, const char *dir)
         cli_json_number(f, r->seconds);
         fprintf(f, ", \"mrays\": ");
         cli_json_number(f, r->mrays);
-        fprintf(f, "}");
+        fprintf(f, ", \"node_width\": %d}", r->node_width);
     }
     fprintf(f, "\n]}\n");
 }
@@ -370,6 +378,19 @@ static const study_row *find(const row_list *rows, const char *scene, const char
         if (strcmp(r->scene, scene) == 0 && strcmp(r->rays, rays) == 0 && strcmp(r->scheme, scheme) == 0 &&
             strcmp(r->isa, isa) == 0 && (!queue || strcmp(r->queue, queue) == 0) &&
             (queue_min < 0 || r->queue_min == queue_min))
+            return r;
+    }
+    return NULL;
+}
+
+/* A set's single-ray row on the tree of node width nw: its own width's
+ * ("wide") or the sweep's ("wide-nodes"). */
+static const study_row *find_nodes(const row_list *rows, const char *scene, const char *isa, int nw)
+{
+    for (size_t i = 0; i < rows->n; i++) {
+        const study_row *r = &rows->rows[i];
+        if (strcmp(r->scene, scene) == 0 && strcmp(r->rays, "all") == 0 && strcmp(r->isa, isa) == 0 &&
+            (strcmp(r->scheme, "wide") == 0 || strcmp(r->scheme, "wide-nodes") == 0) && r->node_width == nw)
             return r;
     }
     return NULL;
@@ -588,6 +609,33 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
                 fprintf(f, "| %s | %s | %s | %.1f | %.1f |\n", scenes[s], lanes_isa_name(i), r->rays,
                         r->live_node, r->live_leaf);
             }
+        }
+
+    fprintf(f, "\n## Node width: single rays through the wide BVH (all ray types), Mrays/s\n\n"
+               "Every set traverses the trees of every node width from its lane count up, a node's children "
+               "in width / lanes vectors; * marks the set's own width, its default. The last column is 16 "
+               "lanes over 8 of the same instruction family on the same 16-wide tree.\n\n"
+               "| Scene | ISA | 4-wide | 8-wide | 16-wide | 16 lanes / 8 (16-wide) |\n|---|---|---|---|---|---|\n");
+    for (int s = 0; s < nscenes; s++)
+        for (int j = 0; j < plan->nsets; j++) {
+            lanes_isa i = plan->sets[j];
+            const lanes_kernels *own = lanes_kernels_for(i);
+            fprintf(f, "| %s | %s |", scenes[s], lanes_isa_name(i));
+            for (int nw = 4; nw <= 16; nw *= 2) {
+                const study_row *r = find_nodes(rows, scenes[s], lanes_isa_name(i), nw);
+                if (r)
+                    fprintf(f, " %.3f%s |", r->mrays, nw == own->wide_width ? "*" : "");
+                else
+                    fprintf(f, " |");
+            }
+            /* the 8-lane set of the same family: avx512 over avx512vl8, avx512emu over avx2 */
+            const char *half = i == LANES_ISA_AVX512 ? "avx512vl8" : i == LANES_ISA_AVX512EMU ? "avx2" : NULL;
+            const study_row *r16 = find_nodes(rows, scenes[s], lanes_isa_name(i), 16);
+            const study_row *r8 = half ? find_nodes(rows, scenes[s], half, 16) : NULL;
+            if (r16 && r8)
+                fprintf(f, " %.2f (over %s) |\n", r16->mrays / r8->mrays, half);
+            else
+                fprintf(f, " |\n");
         }
     cli_finish_file("study", path, f);
 }
@@ -808,7 +856,11 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
 
     int nisa = plan.nsets;
     /* per scene: single scalar + wide per ISA + ranged per ISA + packet none + packet MAX/CORNER per size */
-    progress_bar.total = nspecs * (1 + nisa + nisa + nisa * (2 + 2 * plan.queue_size_count));
+    int node_sweep = 0; /* the other node widths each set traverses */
+    for (int j = 0; j < nisa; j++)
+        for (int nw = 4; nw <= 16; nw *= 2)
+            node_sweep += nw != lanes_kernels_for(plan.sets[j])->wide_width && lanes_kernels_for_width(plan.sets[j], nw);
+    progress_bar.total = nspecs * (1 + nisa + node_sweep + nisa + nisa * (2 + 2 * plan.queue_size_count));
 #ifdef LANES_HAVE_COMPARE
     progress_bar.total += nspecs;
 #endif
@@ -838,11 +890,15 @@ static int study_run(cli_context *ctx, const cli_command *self, int argc, char *
             cli_fail("%s", err.message);
         by_width[4] = &accel4, by_width[8] = &accel8, by_width[16] = &accel16;
 
-        measure_single(&rows, &scene, &accel4, LANES_ISA_SCALAR, LANES_SCHEME_SINGLE, &plan);
+        measure_single(&rows, &scene, &accel4, LANES_ISA_SCALAR, LANES_SCHEME_SINGLE, 0, &plan);
         for (int j = 0; j < plan.nsets; j++) {
             lanes_isa isa = plan.sets[j];
             const lanes_kernels *k = lanes_kernels_for(isa);
-            measure_single(&rows, &scene, by_width[k->wide_width], isa, LANES_SCHEME_WIDE, &plan);
+            measure_single(&rows, &scene, by_width[k->wide_width], isa, LANES_SCHEME_WIDE, 0, &plan);
+            /* the same rays on the trees of the other node widths the set traverses */
+            for (int nw = 4; nw <= 16; nw *= 2)
+                if (nw != k->wide_width && lanes_kernels_for_width(isa, nw))
+                    measure_single(&rows, &scene, by_width[nw], isa, LANES_SCHEME_WIDE, nw, &plan);
             measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_RANGED, LANES_QUEUE_MAX, plan.queue_sizes[0],
                             &plan, hist);
             measure_packets(&rows, &scene, &accel4, isa, LANES_PACKET_PARTITION, LANES_QUEUE_NONE,

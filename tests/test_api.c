@@ -252,6 +252,8 @@ static void test_devices(const char *expect_refused)
         {"threads=-1", "threads=-1", LANES_ERR_BAD_INPUT},
         {"threads=two", "threads=two", LANES_ERR_BAD_INPUT},
         {"accuracy=exact", "accuracy=exact", LANES_ERR_BAD_INPUT},
+        {"node_width=6", "node_width=6", LANES_ERR_BAD_INPUT},
+        {"node_width=", "node_width=", LANES_ERR_BAD_INPUT},
         {"colour=blue", "colour", LANES_ERR_BAD_INPUT},
         {"isa", "key=value", LANES_ERR_BAD_INPUT},
     };
@@ -476,20 +478,32 @@ static void test_queries(const mesh *m)
     }
     results stream = alloc_results(n), packet = alloc_results(n), one = alloc_results(n);
     int sets_run = 0;
-    for (int s = 0; s < LANES_ISA_COUNT; s++) {
-        const char *set_name = lanes_isa_name((lanes_isa)s);
+    for (int s = 0; s < LANES_ISA_COUNT * 3; s++) {
+        /* every set at every node width; those below its lane count refused */
+        const char *set_name = lanes_isa_name((lanes_isa)(s / 3));
+        const int node_width = 4 << s % 3;
+        lanes_device own;
+        char config[96];
+        snprintf(config, sizeof config, "isa=%s", set_name);
+        if (lanes_device_create(config, &own) != LANES_OK) {
+            if (node_width == 4) printf("SKIP %s: %s\n", set_name, lanes_last_error_message());
+            continue;
+        }
+        lanes_device_info own_info;
+        lanes_device_get_info(own, &own_info);
+        lanes_device_release(own);
         for (size_t md = 0; md < 3; md++) {
-            char config[96];
-            snprintf(config, sizeof config, "isa=%s,accuracy=%s,threads=2", set_name, modes[md]);
+            snprintf(config, sizeof config, "isa=%s,node_width=%d,accuracy=%s,threads=2", set_name, node_width,
+                     modes[md]);
             lanes_device d;
             lanes_status st = lanes_device_create(config, &d);
-            if (st == LANES_ERR_CPU_LACKS || st == LANES_ERR_NOT_COMPILED) {
-                if (md == 0) printf("SKIP %s: %s\n", set_name, lanes_last_error_message());
+            if (node_width < own_info.lanes) {
+                expect_error(st, LANES_ERR_BAD_INPUT, "node_width", config);
                 break;
             }
             CHECK(st == LANES_OK, "%s: %s", config, lanes_last_error_message());
             if (st != LANES_OK) break;
-            if (md == 0) sets_run++;
+            if (md == 0 && node_width == own_info.node_width) sets_run++;
             lanes_accel a;
             CHECK(lanes_accel_create(d, m->v, m->nv, m->idx, m->nt, &a) == LANES_OK, "%s: accel: %s", config,
                   lanes_last_error_message());
@@ -497,7 +511,8 @@ static void test_queries(const mesh *m)
             lanes_device_info di;
             lanes_accel_get_info(a, &ai);
             lanes_device_get_info(d, &di);
-            CHECK(ai.node_width == di.node_width && ai.triangles == m->nt && ai.skipped == 0,
+            CHECK(ai.node_width == di.node_width && di.node_width == node_width && ai.triangles == m->nt &&
+                      ai.skipped == 0,
                   "%s: node width %d (device %d), %zu triangles", config, ai.node_width, di.node_width, ai.triangles);
             trace_all(a, &rays, &stream, &packet, &one);
             check_shared(config, d, m, &rays, &stream, &packet, &one, ai.bytes);
@@ -520,9 +535,9 @@ static void test_queries(const mesh *m)
             CHECK(dp == 0 && d1 == 0 && op == 0 && o1 == 0,
                   "%s: packet/single differ from the stream on %zu/%zu closest and %zu/%zu occlusion rays", config,
                   dp, d1, op, o1);
-            printf("%s %s %s: %zu rays, %zu hits, %zu at an edge or tie differ from brute force; stream, packet "
+            printf("%s %s: %zu rays, %zu hits, %zu at an edge or tie differ from brute force; stream, packet "
                    "and single agree\n",
-                   wrong == 0 ? "PASS" : "FAIL", set_name, modes[md], n, hits, close_calls);
+                   wrong == 0 ? "PASS" : "FAIL", config, n, hits, close_calls);
 
             /* Packets of every awkward size, rays beyond 1024 included. */
             size_t sizes[] = {1, 7, 1023, 1024, 1025, 2055};

@@ -516,6 +516,15 @@ typedef struct {
                      lanes_trace_stats *);
 } reordered;
 
+/* "avx2/16": a set and the node width its table traverses. */
+static const char *kname(const lanes_kernels *k)
+{
+    static char names[LANES_ISA_COUNT][3][32];
+    char *n = names[k->isa][k->wide_width == 4 ? 0 : k->wide_width == 8 ? 1 : 2];
+    snprintf(n, sizeof names[0][0], "%s/%d", k->name, k->wide_width);
+    return n;
+}
+
 /* A reordering traversal (hybrid packets, streams) against trace_wide on the
  * same rays: the same t bit for bit, the same triangle (then also u, v bit
  * for bit), the same occlusion, except where the visiting order decides: a
@@ -556,13 +565,13 @@ static void check_reordered(const lanes_kernels *k, reordered x, const lanes_wbv
         } else if (++bad <= 5) {
             harness_fail("%s %s %s: ray %zu: %s prim %d t=%.9g occluded %d, wide prim %d t=%.9g "
                          "occluded %d, brute force prim %ld t=%.9g",
-                         what, k->name, lanes_accuracy_name(acc), r, x.name,
+                         what, kname(k), lanes_accuracy_name(acc), r, x.name,
                          hh[r].prim == LANES_NO_HIT ? -1 : (int)hh[r].prim, hh[r].t, oh[r],
                          hw[r].prim == LANES_NO_HIT ? -1 : (int)hw[r].prim, hw[r].t, ow[r], b, bt);
         }
     }
     if (bad > 5)
-        harness_fail("%s %s %s: %s: %zu rays differ in all", what, k->name, lanes_accuracy_name(acc), x.name, bad);
+        harness_fail("%s %s %s: %s: %zu rays differ in all", what, kname(k), lanes_accuracy_name(acc), x.name, bad);
     free(hw), free(hh), free(ow), free(oh);
 }
 
@@ -600,14 +609,14 @@ static void check_stream(const lanes_kernels *k, const lanes_wbvh *w, lanes_accu
             for (size_t r = 0; r < m; r++)
                 if (os[r] != ow[r] && bad++ == 0) first = r;
             CHECK(bad == 0, "%s %s %s: occluded_stream of %zu rays (%s): %zu answers differ from "
-                  "occluded_wide, the first ray %zu (stream %d, wide %d)", what, k->name,
+                  "occluded_wide, the first ray %zu (stream %d, wide %d)", what, kname(k),
                   lanes_accuracy_name(acc), m, counted ? "counting" : "plain", bad, first,
                   os[first], ow[first]);
             const unsigned char *past = (const unsigned char *)&hs[m];
             CHECK(os[m] == 0xcc && past[0] == 0xcc && past[sizeof *hs - 1] == 0xcc,
-                  "%s %s: a stream of %zu rays wrote past its end", what, k->name, m);
+                  "%s %s: a stream of %zu rays wrote past its end", what, kname(k), m);
             CHECK(!counted || (stats[0].rays == m && stats[1].rays == m),
-                  "%s %s: the streams counted %llu and %llu rays of %zu", what, k->name,
+                  "%s %s: the streams counted %llu and %llu rays of %zu", what, kname(k),
                   (unsigned long long)stats[0].rays, (unsigned long long)stats[1].rays, m);
         }
     }
@@ -653,10 +662,13 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
     /* hybrid or stream and wide differ where the visiting order decides */
     size_t hybrid_order = 0, stream_order = 0;
     dstats ds = {0, 0, 0, 0};
-    for (int i = 0; i < LANES_ISA_COUNT; i++) {
-        lanes_isa isa = (lanes_isa)i;
+    for (int i = 0; i < LANES_ISA_COUNT * 3; i++) {
+        /* every set at every node width it traverses */
+        lanes_isa isa = (lanes_isa)(i / 3);
         if (!lanes_isa_supported(isa)) continue;
-        const lanes_kernels *k = lanes_kernels_for(isa);
+        const lanes_kernels *k = lanes_kernels_for_width(isa, 4 << i % 3);
+        if (!k) continue;
+        const bool own_width = k == lanes_kernels_for(isa);
         for (int m = 0; m < LANES_ACCURACY_COUNT; m++) {
             const lanes_accuracy acc = (lanes_accuracy)m;
             const lanes_tri_algo algo = lanes_accuracy_precision(acc).algo;
@@ -674,7 +686,7 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
             /* the double reference checks the brute force once per algorithm
              * (Möller: the same formula; watertight: same decisions away
              * from edges) */
-            if (isa == LANES_ISA_SCALAR && acc != LANES_ACCURACY_FAST)
+            if (isa == LANES_ISA_SCALAR && own_width && acc != LANES_ACCURACY_FAST)
                 check_double(s, rays, nrays, algo, brute, bt, &ds);
 
             for (int l = 0; l < LEAF_SIZES; l++) {
@@ -682,6 +694,7 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                 for (int scheme = 0; scheme < 4; scheme++) {
                     static const char *const scheme_names[] = {"wide", "bvh2", "hybrid", "stream"};
                     const char *sn = scheme_names[scheme];
+                    if (scheme == 1 && !own_width) continue; /* the BVH2 has no node width */
                     lanes_trace_stats stats;
                     memset(&stats, 0, sizeof stats);
                     if (scheme == 3) {
@@ -706,13 +719,13 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                         k->occluded_wide(w, acc, mode_rays, nrays, occ2, &stats);
                     }
                     CHECK(stats.rays == 2 * nrays, "%s %s %s: stats.rays %llu, expected %zu",
-                          s->name, k->name, sn, (unsigned long long)stats.rays, 2 * nrays);
+                          s->name, kname(k), sn, (unsigned long long)stats.rays, 2 * nrays);
                     for (size_t r = 0; r < nrays; r++) {
                         checks++;
                         const lanes_hit *h = &hits[r];
                         CHECK(memcmp(&hits[r], &hits2[r], sizeof *h) == 0 && occ[r] == occ2[r],
                               "%s %s %s %s leaf %d ray %zu: the counting copy answers differently",
-                              s->name, k->name, lanes_accuracy_name(acc), sn, leaf_sizes[l], r);
+                              s->name, kname(k), lanes_accuracy_name(acc), sn, leaf_sizes[l], r);
                         bool exists = brute[r] >= 0;
                         verdict vd = judge(k, acc, &tris, &mode_rays[r], brute[r], bt[r], bu[r], bv[r], h);
                         bool occ_ok = occlusion_ok(vd, brute[r], h, occ[r] != 0);
@@ -723,12 +736,12 @@ static void brute_scene(const lanes_scene *s, size_t nrays)
                         if (!ok) by_kind[r + 3 >= nrays ? 9 : r % 9]++;
                         CHECK(occ_ok,
                               "%s %s %s occluded_%s leaf %d ray %zu (%s): occluded %d, brute force %s",
-                              s->name, k->name, lanes_accuracy_name(acc), sn, leaf_sizes[l], r,
+                              s->name, kname(k), lanes_accuracy_name(acc), sn, leaf_sizes[l], r,
                               ray_kind_of(r, nrays), occ[r], exists ? "hits" : "misses");
                         CHECK(vd != V_WRONG,
                               "%s %s %s trace_%s leaf %d ray %zu (%s): prim %d t=%.9g u=%.9g "
                               "v=%.9g; brute force prim %ld t=%.9g u=%.9g v=%.9g",
-                              s->name, k->name, lanes_accuracy_name(acc), sn, leaf_sizes[l], r,
+                              s->name, kname(k), lanes_accuracy_name(acc), sn, leaf_sizes[l], r,
                               ray_kind_of(r, nrays), h->prim == LANES_NO_HIT ? -1 : (int)h->prim,
                               h->t, h->u, h->v, brute[r], exists ? bt[r] : 0.0f,
                               exists ? bu[r] : 0.0f, exists ? bv[r] : 0.0f);
@@ -1106,7 +1119,7 @@ static int run_embree(const char *name, long nrays, double scale, double transla
                         hits_judge_pair(&judge, jc, r, &la, &ea, &v);
                         if (v.lanes_wrong > was && printed++ < 10) {
                             printf("  %s %s %s %s ray %zu: lanes wrong: lanes prim %d t=%.9g%s, embree prim %d "
-                                   "t=%.9g%s\n", k->name, lanes_accuracy_name(mode), scheme ? "single" : "wide",
+                                   "t=%.9g%s\n", kname(k), lanes_accuracy_name(mode), scheme ? "single" : "wide",
                                    rs->kind, r, la.prim == LANES_NO_HIT ? -1 : (int)la.prim, la.t,
                                    rs->occlusion ? (la.occluded ? " occluded" : " clear") : "",
                                    ea.prim == LANES_NO_HIT ? -1 : (int)ea.prim, ea.t,
@@ -1119,12 +1132,12 @@ static int run_embree(const char *name, long nrays, double scale, double transla
                     bool pass_judge = mode != LANES_ACCURACY_ROBUST || v.lanes_wrong == 0;
                     printf("%-10s %-7s %-6s %-8s %7zu rays: agreement %.4f%% (%zu lanes wrong, %zu Embree "
                            "wrong, %zu both acceptable) %s\n",
-                           k->name, lanes_accuracy_name(mode), scheme ? "single" : "wide", rs->kind, n,
+                           kname(k), lanes_accuracy_name(mode), scheme ? "single" : "wide", rs->kind, n,
                            100.0 * frac, v.lanes_wrong, v.embree_wrong, v.both_acceptable,
                            pass_agree && pass_judge ? "ok" : "FAIL");
-                    CHECK(pass_agree, "%s %s %s %s: agreement with Embree below 99.99%%", k->name,
+                    CHECK(pass_agree, "%s %s %s %s: agreement with Embree below 99.99%%", kname(k),
                           lanes_accuracy_name(mode), scheme ? "single" : "wide", rs->kind);
-                    CHECK(pass_judge, "%s %s %s %s: lanes wrong on %zu rays in robust mode", k->name,
+                    CHECK(pass_judge, "%s %s %s %s: lanes wrong on %zu rays in robust mode", kname(k),
                           lanes_accuracy_name(mode), scheme ? "single" : "wide", rs->kind, v.lanes_wrong);
                 }
             }

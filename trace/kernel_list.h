@@ -115,7 +115,8 @@
  * and across a leaf block's triangles); the BVH2 form visits two children at a time,
  * as the thesis' "single" baseline, and tests leaf triangles with the wide
  * triangle kernel. */
-#define LANES_KERNELS_TRAVERSE(X)                                                          \
+#define LANES_KERNELS_TRAVERSE(X) LANES_KERNELS_TRAVERSE_WIDE(X) LANES_KERNELS_TRAVERSE_BVH2(X)
+#define LANES_KERNELS_TRAVERSE_WIDE(X)                                                     \
     X(COUNTED_VOID, void, trace_wide,                                                      \
       (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
        size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
@@ -123,7 +124,8 @@
     X(COUNTED_VOID, void, occluded_wide,                                                   \
       (const struct lanes_wbvh *w, lanes_accuracy accuracy, const lanes_ray *rays,         \
        size_t n, uint8_t *occluded, lanes_trace_stats *stats),                             \
-      (w, accuracy, rays, n, occluded))                                                    \
+      (w, accuracy, rays, n, occluded))
+#define LANES_KERNELS_TRAVERSE_BVH2(X)                                                     \
     X(COUNTED_VOID, void, trace_bvh2,                                                      \
       (const struct lanes_bvh2 *b, lanes_accuracy accuracy, const lanes_ray *rays,         \
        size_t n, lanes_hit *hits, lanes_trace_stats *stats),                               \
@@ -209,6 +211,13 @@
     LANES_KERNELS_STREAM(X)                                                                \
     LANES_KERNELS_PACKET(X)                                                                \
     LANES_KERNELS_SHADE(X)
+
+/* The kernels that read a wide BVH: compiled for the set's own node width
+ * (wide_width) and again for each wider one (trace/kernels/wide_variant.h). */
+#define LANES_KERNELS_WIDE_BVH(X)                                                          \
+    LANES_KERNELS_TRAVERSE_WIDE(X)                                                         \
+    LANES_KERNELS_HYBRID(X)                                                                \
+    LANES_KERNELS_STREAM(X)
 
 /* The lanes_kernels member of a row. */
 #define LANES_KERNEL_MEMBER(kind, ret, name, params, args) LANES_KERNEL_MEMBER_##kind(ret, name, params)

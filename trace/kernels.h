@@ -192,12 +192,27 @@ typedef struct lanes_kernels {
     LANES_KERNELS(LANES_KERNEL_MEMBER)
 } lanes_kernels;
 
+/* The kernels of a set that read a wide BVH, compiled for one node width
+ * wider than the set's own (width 0: the set has none for that width). */
+typedef struct lanes_wide_kernels {
+    int width;
+    LANES_KERNELS_WIDE_BVH(LANES_KERNEL_MEMBER)
+} lanes_wide_kernels;
+
 /* The table of the active set (lanes_isa_current()). */
 const lanes_kernels *lanes_kernels_current(void);
 /* The table of a given set, or NULL when it is not compiled in. Calling a
  * table the CPU cannot run is the caller's fault: check
  * lanes_isa_supported() first. */
 const lanes_kernels *lanes_kernels_for(lanes_isa isa);
+/* The table of a set for wide BVHs of node_width (4, 8 or 16) children:
+ * the set's own when that is its wide_width; else the same table with
+ * wide_width and the wide-BVH kernels (LANES_KERNELS_WIDE_BVH) of that
+ * width. NULL when the set is not compiled in or has no kernels for the
+ * width: a node is whole vectors of the set, so widths below its lane
+ * count are not compiled (node widths: scalar and sse4 4, 8, 16; avx, avx2
+ * and avx512vl8 8, 16; avx512emu and avx512 16). */
+const lanes_kernels *lanes_kernels_for_width(lanes_isa isa, int node_width);
 
 /* The rule every prepare applies: no NaN or infinite component in o or d,
  * d != 0, no NaN tnear or tfar. */

@@ -6,6 +6,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,6 +26,47 @@ static const lanes_kernels *const tables[LANES_ISA_COUNT] = {
 const lanes_kernels *lanes_kernels_for(lanes_isa isa)
 {
     return isa >= 0 && isa < LANES_ISA_COUNT ? tables[isa] : NULL;
+}
+
+/* Each set's wide-BVH kernels for wider nodes (trace/kernels/wide_variant.h),
+ * and the tables made from them: the set's own with those laid over. */
+#define DECLARE(id, name)                                                                  \
+    extern const lanes_wide_kernels lanes_wide_kernels_w8_##name, lanes_wide_kernels_w16_##name;
+LANES_BUILT_SETS(DECLARE)
+#undef DECLARE
+
+enum { VARIANT_8, VARIANT_16, VARIANTS };
+static const lanes_wide_kernels *const variants[LANES_ISA_COUNT][VARIANTS] = {
+#define ENTRY(id, name) [LANES_ISA_##id] = {&lanes_wide_kernels_w8_##name, &lanes_wide_kernels_w16_##name},
+    LANES_BUILT_SETS(ENTRY)
+#undef ENTRY
+};
+static lanes_kernels by_width[LANES_ISA_COUNT][VARIANTS];
+static pthread_once_t by_width_once = PTHREAD_ONCE_INIT;
+
+static void make_by_width(void)
+{
+    for (int i = 0; i < LANES_ISA_COUNT; i++)
+        for (int v = 0; v < VARIANTS; v++) {
+            const lanes_wide_kernels *w = variants[i][v];
+            if (!tables[i] || !w || w->width == 0) continue;
+            lanes_kernels *k = &by_width[i][v];
+            *k = *tables[i];
+            k->wide_width = w->width;
+#define LAY_OVER(kind, ret, name, params, args) k->name = w->name;
+            LANES_KERNELS_WIDE_BVH(LAY_OVER)
+#undef LAY_OVER
+        }
+}
+
+const lanes_kernels *lanes_kernels_for_width(lanes_isa isa, int node_width)
+{
+    const lanes_kernels *k = lanes_kernels_for(isa);
+    if (!k || k->wide_width == node_width) return k;
+    int v = node_width == 8 ? VARIANT_8 : node_width == 16 ? VARIANT_16 : -1;
+    if (v < 0) return NULL;
+    pthread_once(&by_width_once, make_by_width);
+    return by_width[isa][v].wide_width == node_width ? &by_width[isa][v] : NULL;
 }
 
 const lanes_kernels *lanes_kernels_current(void) { return tables[lanes_isa_current()]; }

@@ -83,7 +83,7 @@ static lanes_status fail(lanes_device device, lanes_status status, const char *f
 
 /* One key=value of the config string; value is not NUL-terminated. */
 static lanes_status apply_setting(struct lanes_device_impl *d, const char *key, size_t key_len,
-                                  const char *value, size_t value_len, bool *isa_given)
+                                  const char *value, size_t value_len, bool *isa_given, int *node_width)
 {
     char v[64];
     if (value_len >= sizeof v)
@@ -107,6 +107,10 @@ static lanes_status apply_setting(struct lanes_device_impl *d, const char *key, 
             return fail(NULL, LANES_ERR_BAD_INPUT,
                         "device config: threads=%s: not a whole number from 0 to 1024", v);
         d->threads = (int)n;
+    } else if (key_len == 10 && strncmp(key, "node_width", 10) == 0) {
+        if (strcmp(v, "4") && strcmp(v, "8") && strcmp(v, "16"))
+            return fail(NULL, LANES_ERR_BAD_INPUT, "device config: node_width=%s: not 4, 8 or 16", v);
+        *node_width = atoi(v);
     } else if (key_len == 8 && strncmp(key, "accuracy", 8) == 0) {
         int a = lanes_accuracy_from_name(v);
         if (a < 0)
@@ -115,13 +119,14 @@ static lanes_status apply_setting(struct lanes_device_impl *d, const char *key, 
         d->accuracy = (lanes_accuracy)a;
     } else {
         return fail(NULL, LANES_ERR_BAD_INPUT,
-                    "device config: unknown key '%.*s' (keys: isa, threads, accuracy)",
+                    "device config: unknown key '%.*s' (keys: isa, node_width, threads, accuracy)",
                     (int)key_len, key);
     }
     return LANES_OK;
 }
 
-static lanes_status parse_config(struct lanes_device_impl *d, const char *config, bool *isa_given)
+static lanes_status parse_config(struct lanes_device_impl *d, const char *config, bool *isa_given,
+                                 int *node_width)
 {
     const char *p = config;
     while (p && *p) {
@@ -139,7 +144,7 @@ static lanes_status parse_config(struct lanes_device_impl *d, const char *config
         size_t value_len = len - (size_t)(value - p);
         while (value_len > 0 && *value == ' ') value++, value_len--;
         while (value_len > 0 && value[value_len - 1] == ' ') value_len--;
-        lanes_status st = apply_setting(d, p, key_len, value, value_len, isa_given);
+        lanes_status st = apply_setting(d, p, key_len, value, value_len, isa_given, node_width);
         if (st != LANES_OK) return st;
         p += len;
     }
@@ -154,7 +159,8 @@ LANES_API lanes_status lanes_device_create(const char *config, lanes_device *dev
     if (!d) return fail(NULL, LANES_ERR_OUT_OF_MEMORY, "lanes_device_create: out of memory");
     d->accuracy = LANES_ACCURACY_DEFAULT;
     bool isa_given = false;
-    lanes_status st = parse_config(d, config, &isa_given);
+    int node_width = 0;
+    lanes_status st = parse_config(d, config, &isa_given, &node_width);
     if (st == LANES_OK) {
         /* LANES_ISA and LANES_MAX_ISA, as for every program using lanes: a
          * bad value is an error here, not a quiet fall back to the best set,
@@ -169,6 +175,16 @@ LANES_API lanes_status lanes_device_create(const char *config, lanes_device *dev
     }
     if (st == LANES_OK && !d->k)
         st = fail(NULL, LANES_ERR_NOT_COMPILED, "lanes_device_create: no kernel set available");
+    if (st == LANES_OK && node_width) {
+        const lanes_kernels *k = lanes_kernels_for_width(d->k->isa, node_width);
+        if (!k)
+            st = fail(NULL, LANES_ERR_BAD_INPUT,
+                      "device config: node_width=%d: the %s set (%d lanes) traverses nodes of %d children "
+                      "or more, in whole vectors",
+                      node_width, d->k->name, d->k->lanes, d->k->wide_width);
+        else
+            d->k = k;
+    }
     if (st != LANES_OK) {
         free(d);
         return st;

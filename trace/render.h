@@ -35,6 +35,8 @@ typedef struct lanes_render_options {
     int threads;         /* 0: all cores */
     int max_depth;       /* specular bounces, default 10, at most LANES_MAX_DEPTH */
     int area_samples;    /* shadow rays per area light per hit, default 4 */
+    int node_width;      /* the wide scheme's node width (lanes_kernels_for_width);
+                          * 0: the set's own */
     /* Called from worker threads with the fraction done; may be NULL. */
     void (*progress)(void *ctx, double fraction);
     void *progress_ctx;

@@ -166,6 +166,12 @@ typedef struct lanes_device_impl *lanes_device;
  *                     if set, else the best set the CPU runs, at most
  *                     LANES_MAX_ISA). A set the CPU cannot run, or an
  *                     unknown name, is an error: never a silent fallback.
+ *   node_width=N      children per node of the accels it builds: 4, 8 or
+ *                     16, from the set's lane count up (the scalar set
+ *                     traverses any; sse4 any; avx, avx2 and avx512vl8 8 or
+ *                     16; avx512emu and avx512 16). Default: the set's own,
+ *                     lanes_device_info.node_width. A width below the set's
+ *                     is an error (LANES_ERR_BAD_INPUT).
  *   threads=N         threads for building accels (0: all cores; default 0)
  *   accuracy=MODE     fast, default or robust (see the README's accuracy
  *                     modes; default: default)

@@ -375,9 +375,9 @@ LANES_BODY void hybrid_group(const lanes_wbvh *wb, lanes_accuracy accuracy, cons
         /* trace_wide's own entry, which also counts the rays: inlined
          * here, the same loop ran 9% more instructions (callgrind) */
         if (any)
-            LANES_FN(lanes_occluded_wide)(wb, accuracy, rays, m, occluded, stats);
+            LANES_KFN(lanes_occluded_wide)(wb, accuracy, rays, m, occluded, stats);
         else
-            LANES_FN(lanes_trace_wide)(wb, accuracy, rays, m, hits, stats);
+            LANES_KFN(lanes_trace_wide)(wb, accuracy, rays, m, hits, stats);
         return;
     }
     if (stats) stats->rays += m;

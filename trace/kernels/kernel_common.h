@@ -127,12 +127,14 @@ LANES_BODY lanes_vray lanes_load_rays(const lanes_rays *r, const uint32_t *idx, 
 }
 
 /* The wide BVH this set's traversal reads: one node test is one vector
- * operation, except for the scalar set, which loops over a 4-wide node. */
-#if LANES_W == 1
-#define LANES_WIDE_WIDTH 4
-#else
-#define LANES_WIDE_WIDTH LANES_W
+ * operation, except for the scalar set, which loops over a 4-wide node.
+ * wide_variant.h compiles the wide-BVH kernels again with a wider node
+ * (LANES_WIDE_WIDTH defined first), tested in width / LANES_W vectors. */
+#ifndef LANES_WIDE_WIDTH
+#define LANES_WIDE_WIDTH (LANES_W == 1 ? 4 : LANES_W)
 #endif
+_Static_assert(LANES_WIDE_WIDTH % LANES_W == 0 && LANES_WIDE_WIDTH <= 16,
+               "a node is whole vectors of the set, at most 16 children");
 
 /* Unit roundoff of float, for the outward widening of conservative bounds. */
 #define LANES_U 0x1p-24f

@@ -153,5 +153,9 @@ LANES_BODY void occluded_bvh2_body(const lanes_bvh2 *b, lanes_accuracy accuracy,
     if (stats) stats->rays += n;
 }
 
-/* The entry points: each body instantiated with and without counting. */
-LANES_KERNELS_TRAVERSE(LANES_KERNEL_ENTRY)
+/* The entry points: each body instantiated with and without counting.
+ * The BVH2 reads no wide node: one copy per set. */
+LANES_KERNELS_TRAVERSE_WIDE(LANES_KERNEL_ENTRY)
+#ifndef LANES_WIDE_TAG
+LANES_KERNELS_TRAVERSE_BVH2(LANES_KERNEL_ENTRY)
+#endif
