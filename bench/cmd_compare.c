@@ -538,7 +538,7 @@ static void print_json(const compare *c, double embree_build)
     printf(",\n  \"embree_isa\": ");
     cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
     printf(",\n  \"accuracy\": \"%s\"", lanes_accuracy_name(c->opt.accuracy));
-    printf(",\n  \"node_width\": %d", c->opt.node_width);
+
     printf(",\n  \"scale\": ");
     cli_json_number(stdout, c->opt.scale);
     printf(",\n  \"translate\": ");
@@ -564,6 +564,7 @@ static void print_json(const compare *c, double embree_build)
         cli_json_string(stdout, w->method);
         printf(", \"isa\": ");
         cli_json_string(stdout, w->isa);
+        if (!w->embree) printf(", \"node_width\": %d", set_kernels(c, lanes_isa_from_name(w->isa))->wide_width);
         printf(", \"threads\": %d, \"mrays\": %.4f, \"ratio\": %.4f}%s\n", w->threads, w->mrays,
                w->ratio, i + 1 < c->res.count ? "," : "");
     }
@@ -586,8 +587,8 @@ static const char usage[] =
     "                     [--quick]\n"
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
-    "\"wide\" = the set's wide BVH, \"hybrid\" = packets of the set's lane count\n"
-    "on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2,\n"
+    "\"wide\" = the set's wide BVH (or --node-width's), \"hybrid\" = packets of the\n"
+    "set's lane count on the wide BVH, \"packet\" = 1024-ray partition packets on the BVH2,\n"
     "\"stream\" = rays sorted by octant, in groups of 32 through the wide BVH) and\n"
     "through Embree (each of rtcIntersect1/4/8/16/1M/Np, default and coherent\n"
     "contexts; rtcOccluded* for shadow rays), on one pinned thread and on N, and\n"

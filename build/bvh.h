@@ -142,9 +142,10 @@ static inline const uint32_t *lanes_wblock_prims(const lanes_wbvh *w, size_t blo
 
 /* Collapses optimally: of all the wide trees whose nodes are cuts of the
  * BVH2 of at most `width` slots and whose leaves are the BVH2's leaves, the
- * one of least lanes_wbvh_sah cost (with the BVH2's costs), found by
+ * one of least lanes_wbvh_sah cost (with the BVH2's costs, and its nodes'
+ * areas, which are the wide nodes' for the tight boxes the builder makes), found by
  * dynamic programming over the BVH2 (Ylitie et al. 2017) in time
- * O(nodes * width^2) and about nodes * (9 * width + 8) bytes of scratch.
+ * O(nodes * width^2) and at most nodes * (9 * width + 8) bytes of scratch.
  * Each leaf slot holds one BVH2 leaf's triangles, in blocks. Ties open the
  * node rather than keep it; slots keep the BVH2's left-to-right order, and
  * empty slots come last. The interior children of a wide node have

@@ -255,6 +255,10 @@ static bool plan_collapse(const lanes_bvh2 *bvh, size_t W, collapse_plan *p, con
     }
     free(order);
     free(stack);
+    /* Only the splits are read from here on: the costs are the bulk of the
+     * scratch (8 * width bytes per BVH2 node). */
+    free(p->cost);
+    p->cost = NULL;
     if (!ok) plan_free(p);
     return ok;
 }

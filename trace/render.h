@@ -61,7 +61,8 @@ typedef struct lanes_render_result {
  * wide scheme, else the BVH2 (single ray and packets). */
 typedef struct lanes_render_accel {
     lanes_bvh2 bvh2;        /* node_count 0 when not built */
-    lanes_wbvh wide;        /* width == the set's wide_width, or 0 when not built */
+    lanes_wbvh wide;        /* width == the kernel table's wide_width (the set's own, or
+                             * the options' node_width), or 0 when not built */
 } lanes_render_accel;
 
 /* wide_for: the set whose wide BVH to build (lanes_wbvh_build), or NULL;

@@ -199,7 +199,8 @@ LANES_API lanes_status lanes_device_get_info(lanes_device device, lanes_device_i
 
 /* ------------------------------------------------------------------------
  * Accel: a BVH over a triangle mesh, built for the device's instruction set
- * (its node width follows the set, so a mismatched width cannot happen).
+ * and node width (node_width=, else the set's own), so a mismatched width
+ * cannot happen.
  * ------------------------------------------------------------------------ */
 typedef struct lanes_accel_impl *lanes_accel;
 

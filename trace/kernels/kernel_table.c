@@ -1,5 +1,6 @@
-/* The kernel table of one instruction set: the only object of a per-ISA
- * library that other code reaches, through lanes_kernels_for(). */
+/* The kernel table of one instruction set: with the wider-node tables of
+ * wide_variant.h, the only objects of a per-ISA library that other code
+ * reaches, through lanes_kernels_for() and lanes_kernels_for_width(). */
 #include "trace/kernels/kernel_common.h"
 #include "trace/kernels/kernel_decls.h"
 
