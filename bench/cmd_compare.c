@@ -538,7 +538,6 @@ static void print_json(const compare *c, double embree_build)
     printf(",\n  \"embree_isa\": ");
     cli_json_string(stdout, lanes_embree_isa_name(lanes_embree_get_isa(c->embree)));
     printf(",\n  \"accuracy\": \"%s\"", lanes_accuracy_name(c->opt.accuracy));
-
     printf(",\n  \"scale\": ");
     cli_json_number(stdout, c->opt.scale);
     printf(",\n  \"translate\": ");

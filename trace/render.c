@@ -255,10 +255,13 @@ lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *ac
         return lanes_error_set(err, job.k ? LANES_ERR_CPU_LACKS : LANES_ERR_NOT_COMPILED,
                                "render: instruction set '%s' is not available", lanes_isa_name(opt->isa));
     }
-    if (opt->node_width && !lanes_kernels_for_width(opt->isa, opt->node_width))
-        return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: the %s set has no kernels for %d-wide nodes",
-                               job.k->name, opt->node_width);
-    if (opt->node_width) job.k = lanes_kernels_for_width(opt->isa, opt->node_width);
+    if (opt->node_width) {
+        const lanes_kernels *k = lanes_kernels_for_width(opt->isa, opt->node_width);
+        if (!k)
+            return lanes_error_set(err, LANES_ERR_BAD_INPUT, "render: the %s set has no kernels for %d-wide nodes",
+                                   job.k->name, opt->node_width);
+        job.k = k;
+    }
     if (opt->api_accel && opt->scheme != LANES_SCHEME_WIDE) {
         return lanes_error_set(err, LANES_ERR_BAD_INPUT,
                                "render: the public API traces the wide scheme only");
