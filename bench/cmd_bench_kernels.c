@@ -27,6 +27,7 @@
 #include "bench/cli_common.h"
 #include "bench/kernel_inputs.h"
 #include "bench/kernel_model.h"
+#include "bench/pipe_rates.h"
 #include "trace/kernels.h"
 
 /* ---- the kernels under test -------------------------------------------- */
@@ -202,6 +203,10 @@ typedef struct sample_plan {
 
 /* ---- results ----------------------------------------------------------- */
 
+/* The instruction classes the resource bound charges (kernel_model.h). */
+enum { C_VEC, C_MUL, C_ADD, C_LOAD, C_STORE, C_MASKSTORE, NCLASS };
+static const int class_bit[NCLASS] = {KM_VECTOR, KM_MUL, KM_ADD, KM_LOAD, KM_STORE, KM_MASKSTORE};
+
 typedef struct result {
     double ns_per_test;  /* median */
     double cpu_share;    /* median of thread CPU time / wall time over the timed runs */
@@ -217,8 +222,8 @@ typedef struct result {
     size_t nsites[2];
     double instr[2];     /* instructions summed over the m- and 2m-iteration samples */
     double ipi;          /* instructions per vector iteration of a timed call */
-    double vec_ipi;      /* of which on FP/vector pipes; < 0 unknown */
-    double zmm_ipi;      /* of which on 512-bit registers */
+    bool classified;     /* cls_ipi holds the instruction classes */
+    double cls_ipi[2][NCLASS]; /* per iteration, by class; [1]: on zmm registers */
 } result;
 
 static volatile size_t sink; /* keeps the kernels' results alive */
@@ -333,19 +338,18 @@ static double per_timed_iteration(double sum1, double sum2, const sample_plan *p
 
 static void classify_counts(const bench_case *c, size_t w, const km_disasm *d, result *r)
 {
-    double vec[2] = {0, 0}, zmm[2] = {0, 0};
+    double sum[2][2][NCLASS] = {{{0}}}; /* [sample size][zmm][class] */
     for (int s = 0; s < 2; s++)
         for (size_t i = 0; i < r->nsites[s]; i++) {
             int cls = km_disasm_class(d, r->sites[s][i].addr);
-            if (cls < 0) {
-                r->vec_ipi = -1;
-                return;
-            }
-            if (cls & KM_VECTOR) vec[s] += (double)r->sites[s][i].count;
-            if ((cls & KM_VECTOR) && (cls & KM_ZMM)) zmm[s] += (double)r->sites[s][i].count;
+            if (cls < 0) return;
+            for (int k = 0; k < NCLASS; k++)
+                if (cls & class_bit[k]) sum[s][(cls & KM_ZMM) != 0][k] += (double)r->sites[s][i].count;
         }
-    r->vec_ipi = per_timed_iteration(vec[0], vec[1], &r->plan, w, c->n);
-    r->zmm_ipi = per_timed_iteration(zmm[0], zmm[1], &r->plan, w, c->n);
+    for (int z = 0; z < 2; z++)
+        for (int k = 0; k < NCLASS; k++)
+            r->cls_ipi[z][k] = per_timed_iteration(sum[0][z][k], sum[1][z][k], &r->plan, w, c->n);
+    r->classified = true;
 }
 
 /* ---- the machine ------------------------------------------------------- */
@@ -398,15 +402,6 @@ static double issue_bound(const result *r, double hz, int width, int lanes)
     return r->counted && r->ipi > 0 ? hz * width * lanes / r->ipi / 1e6 : 0;
 }
 
-/* Vector-pipe bound: the FP/vector operations of an iteration spread over
- * all pipes; a 512-bit operation counts twice on a half-rate core. */
-static double pipe_bound(const result *r, double hz, const km_core *core, int lanes)
-{
-    if (!r->counted || r->vec_ipi <= 0 || core->vector_pipes == 0) return 0;
-    double slots = r->vec_ipi + (core->zmm_half_rate ? r->zmm_ipi : 0);
-    return hz * core->vector_pipes * lanes / slots / 1e6;
-}
-
 static void print_row_label(const bench_case *c) { printf("%-22s %-6s", c->kernel, c->form); }
 
 static void print_isa_header(const lanes_isa *isas, size_t nisa, int group_width, const char *sub)
@@ -431,6 +426,7 @@ typedef struct bench_run {
     km_core core;
     int width;
     double hz, hz_before, hz_after;
+    km_pipes pipes;
     size_t max_samples;
     double budget;
     bool count_failed;
@@ -443,6 +439,58 @@ typedef struct bench_run {
     size_t needed_count[3];
     result res[NCASES][LANES_ISA_COUNT];
 } bench_run;
+
+/* The resource bound: an iteration takes at least as many cycles as the
+ * scarcest resource it uses needs, each resource's operations over its
+ * measured rate (pipe_rates.h). A zmm operation counts as many ymm ones as
+ * the measured rates say (two on a core that splits it); min, max and
+ * compares are charged to the adders; the mixed rate says whether
+ * multiplies and adds share pipes. */
+enum { R_ISSUE, R_MUL, R_ADD, R_MUL_ADD, R_VEC, R_LOAD, R_STORE, R_MASKSTORE, NRES };
+static const char *const resource_name[NRES] = {"issue", "mul", "add", "mul+add",
+                                                "vector", "load", "store", "maskstore"};
+
+static double zmm_weight(double ymm_rate, double zmm_rate)
+{
+    return zmm_rate > 0 ? ymm_rate / zmm_rate : 1.0;
+}
+
+static double resource_cycles(const result *r, const bench_run *b, int res)
+{
+    const km_pipes *p = &b->pipes;
+    const double *y = r->cls_ipi[0], *z = r->cls_ipi[1];
+    const double wv = zmm_weight(p->mul, p->zmm_mul);
+    switch (res) {
+    case R_ISSUE: return r->ipi / b->width;
+    case R_MUL: return (y[C_MUL] + wv * z[C_MUL]) / p->mul;
+    case R_ADD: return (y[C_ADD] + wv * z[C_ADD]) / p->add;
+    case R_MUL_ADD: return (y[C_MUL] + y[C_ADD] + wv * (z[C_MUL] + z[C_ADD])) / p->mul_add;
+    case R_VEC: return (y[C_VEC] + wv * z[C_VEC]) / p->any;
+    case R_LOAD: return (y[C_LOAD] + zmm_weight(p->load, p->zmm_load) * z[C_LOAD]) / p->load;
+    case R_STORE: return (y[C_STORE] + zmm_weight(p->store, p->zmm_store) * z[C_STORE]) / p->store;
+    default: return (y[C_MASKSTORE] + z[C_MASKSTORE]) * p->masked_store_cyc;
+    }
+}
+
+/* The bound in cycles per iteration and the resource that sets it; 0 when
+ * the instructions or the rates are unknown. */
+static double resource_bound(const result *r, const bench_run *b, int *which)
+{
+    *which = -1;
+    if (!r->counted || !r->classified || !b->pipes.measured) return 0;
+    double worst = 0;
+    for (int res = 0; res < NRES; res++) {
+        double c = resource_cycles(r, b, res);
+        if (c > worst) worst = c, *which = res;
+    }
+    return worst;
+}
+
+/* Cycles one vector iteration took in the timed runs. */
+static double measured_cycles(const result *r, double hz, int lanes)
+{
+    return r->ns_per_test * 1e-9 * hz * lanes;
+}
 
 /* Which culled primitives some ray of the packet really hits, by the
  * scalar box test and the watertight triangle test. */
@@ -502,7 +550,6 @@ static void measure_case(bench_run *b, size_t ci, const kernel_inputs *in, outpu
         result *r = &b->res[ci][i];
         counting_run(c, &envs[i], r);
         r->culled_hit = culled_but_hit(b, c, out->bits); /* culling makes one call per batch */
-        r->vec_ipi = -1;
         if (!b->opt.count || b->count_failed) continue;
         count_instructions(c, &envs[i], b->max_samples, b->budget, r);
         if (!r->counted) {
@@ -630,16 +677,38 @@ static void print_model(const bench_run *b)
            "low by up to one\n"
            "    op per branch.\n",
            b->max_samples, mlo, mhi, b->budget, KI_PACKET_RAYS, KI_WIDE_COUNT);
-    if (!b->core.vector_pipes) return;
-    if (b->classified)
-        printf("  vector-pipe bound (a second model): f_clk * %d pipes * lanes / "
-               "vector_ops_per_iteration%s;\n"
-               "    vector ops = executed instructions on xmm/ymm/zmm/k registers except loads, "
-               "stores and register\n"
-               "    moves (classified from objdump -d of this executable)\n",
-               b->core.vector_pipes, b->core.zmm_half_rate ? " (512-bit ops count twice)" : "");
+    const km_pipes *p = &b->pipes;
+    if (!p->measured) {
+        printf("  resource bound: UNAVAILABLE: the CPU lacks AVX, which the pipe probes use\n");
+        return;
+    }
+    printf("  resource bound (a second model): cycles per iteration >= the largest of, per "
+           "resource,\n"
+           "    its operations per iteration / its rate; rates measured on this core (12 "
+           "independent operations\n"
+           "    per loop, fastest of 7 runs), per cycle, of 256-bit operations:\n"
+           "      mul %.2f (%s)  add %.2f (vaddps; min, max and compares charged here)  mul+add "
+           "%.2f (half each)\n"
+           "      vector %.2f (vandps: every pipe)  load %.2f  store %.2f  (vmovups)\n",
+           p->mul, lanes_cpu()->bits & LANES_CPU_FMA ? "vfmadd231ps" : "vmulps", p->add,
+           p->mul_add, p->any, p->load, p->store);
+    if (p->zmm_mul > 0)
+        printf("      512-bit: mul %.2f load %.2f store %.2f per cycle: a zmm operation counts "
+               "%.2f, %.2f, %.2f of 256-bit ones\n",
+               p->zmm_mul, p->zmm_load, p->zmm_store, zmm_weight(p->mul, p->zmm_mul),
+               zmm_weight(p->load, p->zmm_load), zmm_weight(p->store, p->zmm_store));
+    printf("      masked store: vmaskmovps %.1f cycles each against %.1f for a load, vblendvps "
+           "and store of the\n"
+           "      same bytes, so the kernels merge whole vectors and keep vmaskmovps for an "
+           "array's tail\n",
+           p->masked_store_cyc, p->merge_cyc);
+    if (p->zmm_masked_store_cyc > 0)
+        printf("      (opmask store of a zmm: %.1f cycles)\n", p->zmm_masked_store_cyc);
+    if (!b->classified) printf("  resource bound: UNAVAILABLE: %s\n", b->class_error);
     else
-        printf("  vector-pipe bound: UNAVAILABLE: %s\n", b->class_error);
+        printf("    operations by class from objdump -d of this executable at the executed "
+               "addresses (loads and\n"
+               "    stores by operand, vector ops: xmm/ymm/zmm/k instructions but moves)\n");
 }
 
 static void print_counts(const bench_run *b)
@@ -657,19 +726,21 @@ static void print_counts(const bench_run *b)
         }
         printf("\n");
     }
-    if (!b->classified || !b->core.vector_pipes) return;
-    printf("\nvector-pipe ops per iteration / vector-pipe bound in Mt/s / measured fraction of it\n");
-    print_isa_header(b->isas, b->nisa, 22, "  vecops   bound  frac");
+    if (!b->classified || !b->pipes.measured) return;
+    printf("\ncycles per vector iteration: measured / resource bound / the resource that sets "
+           "it\n");
+    print_isa_header(b->isas, b->nisa, 24, " cycles  bound by      ");
     for (size_t ci = 0; ci < NCASES; ci++) {
         print_row_label(&cases[ci]);
         for (size_t i = 0; i < b->nisa; i++) {
             const result *r = &b->res[ci][i];
-            double bound = pipe_bound(r, b->hz, &b->core, lanes_isa_lanes(b->isas[i]));
+            int which;
+            double bound = resource_bound(r, b, &which);
+            double cyc = measured_cycles(r, b->hz, lanes_isa_lanes(b->isas[i]));
             if (bound > 0)
-                printf(" %7.1f %s %5.2f", r->vec_ipi, fmt_rate(buf, sizeof buf, bound),
-                       mtests(r) / bound);
+                printf(" %7.1f %6.1f %-9s", cyc, bound, resource_name[which]);
             else
-                printf(" %7s %7s %5s", "n/a", "n/a", "n/a");
+                printf(" %7.1f %6s %-9s", cyc, "n/a", "");
         }
         printf("\n");
     }
@@ -754,7 +825,8 @@ static void print_inputs(const bench_run *b)
 static void write_csv(const bench_run *b, FILE *csv)
 {
     fprintf(csv, "kernel,form,isa,lanes,mtests_per_s,median_ns_per_test,instructions_per_iter,"
-                 "bound_mtests_per_s,fraction_of_bound,lane_utilization\n");
+                 "bound_mtests_per_s,fraction_of_bound,lane_utilization,cycles_per_iter,"
+                 "resource_bound_cycles,bound_resource\n");
     for (size_t ci = 0; ci < NCASES; ci++)
         for (size_t i = 0; i < b->nisa; i++) {
             const result *r = &b->res[ci][i];
@@ -771,7 +843,13 @@ static void write_csv(const bench_run *b, FILE *csv)
                 fprintf(csv, "%.2f,%.4f,%.4f,", r->ipi, bound, mtests(r) / bound);
             else
                 fprintf(csv, ",,,");
-            fprintf(csv, "%.4f\n", r->utilization);
+            fprintf(csv, "%.4f,%.2f,", r->utilization, measured_cycles(r, b->hz, lanes));
+            int which;
+            double rb = resource_bound(r, b, &which);
+            if (rb > 0)
+                fprintf(csv, "%.2f,%s\n", rb, resource_name[which]);
+            else
+                fprintf(csv, ",\n");
         }
 }
 
@@ -878,6 +956,7 @@ static int bench_kernels_run(cli_context *ctx, const cli_command *self, int argc
     if (progress) fprintf(stderr, "\r\033[K");
     b->hz_after = km_measure_clock_hz(7, clock_ms);
     b->hz = 0.5 * (b->hz_before + b->hz_after);
+    b->pipes = km_measure_pipes(b->hz, 7, b->opt.quick ? 2 : 10);
     if (b->opt.count && !b->count_failed) classify_all(b);
 
     printf("cpu share: %.1f%% (thread CPU time / wall time of timed runs, median per kernel and "
@@ -921,14 +1000,18 @@ const cli_command cli_cmd_bench_kernels = {
         "watertight) in packet form (N rays x 1 primitive) and wide form (1 ray x N\n"
         "primitives), frustum culling of boxes and triangles (interval and planes) and\n"
         "frustum building, as a fraction of a throughput bound from each kernel's\n"
-        "instruction count and the core's issue width.\n"
+        "instruction count and the core's issue width; and each kernel's cycles per\n"
+        "vector iteration against a resource bound (its multiplies, adds, vector ops,\n"
+        "loads, stores and masked stores over this core's rates for each, timed here),\n"
+        "naming the resource that sets it.\n"
         "\n"
         "  --isa NAME         measure only NAME (default: every set this CPU runs; LANES_ISA\n"
         "                     changes the selected set shown, not the sets measured)\n"
         "  --all              every set this CPU runs (the default; excludes --isa)\n"
         "  --csv FILE         one row per kernel, form and set: kernel,form,isa,lanes,\n"
         "                     mtests_per_s,median_ns_per_test,instructions_per_iter,\n"
-        "                     bound_mtests_per_s,fraction_of_bound,lane_utilization\n"
+        "                     bound_mtests_per_s,fraction_of_bound,lane_utilization,\n"
+        "                     cycles_per_iter,resource_bound_cycles,bound_resource\n"
         "  --reps N           timed runs per kernel and set, median reported (default 7; 1-1000)\n"
         "  --run-ms N         length of one timed run in ms (default 25; 1-10000)\n"
         "  --quick            smoke run: 3 runs of ~3 ms, fewer counted samples\n"

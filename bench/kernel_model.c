@@ -19,28 +19,22 @@
 
 km_core km_core_model(const char *vendor, unsigned family, unsigned model)
 {
-    km_core c = {4, 0, false, "unknown core", "", false};
+    km_core c = {4, "unknown core", "", false};
     (void)model;
     if (strcmp(vendor, "AuthenticAMD") == 0 && family == 0x1a) {
         c.issue_width = 8;
-        c.vector_pipes = 4;
         c.name = "AMD Zen 5 (family 1Ah)";
-        c.why = "Zen 5 renames and dispatches 8 macro-ops per cycle (Zen 1-4: 6); its FP/vector "
-                "unit has 4 execution pipes (2 FMA/multiply, 2 add) with a full 512-bit data path";
+        c.why = "Zen 5 renames and dispatches 8 macro-ops per cycle (Zen 1-4: 6)";
         c.known = true;
     } else if (strcmp(vendor, "AuthenticAMD") == 0 && family == 0x19) {
         c.issue_width = 6;
-        c.vector_pipes = 4;
-        c.zmm_half_rate = true;
         c.name = "AMD Zen 3/4 (family 19h)";
-        c.why = "Zen 3 and 4 dispatch 6 macro-ops per cycle; 4 FP/vector pipes of 256 bits, "
-                "so a 512-bit operation (Zen 4) occupies its pipe for two cycles";
+        c.why = "Zen 3 and 4 dispatch 6 macro-ops per cycle";
         c.known = true;
     } else if (strcmp(vendor, "AuthenticAMD") == 0 && family == 0x17) {
         c.issue_width = 6;
-        c.vector_pipes = 4;
         c.name = "AMD Zen 1/2 (family 17h)";
-        c.why = "Zen 1 and 2 dispatch 6 macro-ops per cycle; 4 FP/vector pipes";
+        c.why = "Zen 1 and 2 dispatch 6 macro-ops per cycle";
         c.known = true;
     } else {
         c.why = "no table entry for this core: 4 per cycle assumed, the width of most x86 cores "
@@ -256,25 +250,55 @@ static bool starts_with(const char *s, const char *prefix)
     return strncmp(s, prefix, strlen(prefix)) == 0;
 }
 
-/* Does the instruction occupy an FP/vector execution pipe? Moves are left
- * out: loads and stores go through the load/store pipes, register copies
- * are eliminated at rename, broadcasts from memory are loads. What remains
- * is arithmetic, compares, blends, shuffles, conversions, mask operations. */
-static int classify(const char *mnemonic, const char *operands)
+static bool any_prefix(const char *s, const char *const *prefixes)
 {
+    for (; *prefixes; prefixes++)
+        if (starts_with(s, *prefixes)) return true;
+    return false;
+}
+
+/* Memory: an operand in parentheses (but lea and nop only compute or pad
+ * an address). AT&T puts the destination last, so memory there is a store,
+ * except for the instructions that only read their operands; the load half
+ * of a read-modify-write (add %eax,(%rdx)) is not counted, an integer form
+ * the kernels' timed copies do not use. A vector
+ * pipe: any operation on xmm/ymm/zmm/k registers but moves (loads and
+ * stores go through the load/store pipes, register copies are eliminated
+ * at rename, broadcasts from memory are loads). */
+int km_classify(const char *mnemonic, const char *operands)
+{
+    static const char *const reads_only[] = {"cmp", "test", "bt", "ucomis", "comis", "vucomis",
+                                             "vcomis", "prefetch", NULL};
+    static const char *const shuffle_like[] = {"movmsk", "movshdup", "movsldup", "movddup",
+                                               "movhlps", "movlhps", NULL};
+    static const char *const mul[] = {"mul", "fmadd", "fmsub", "fnmadd", "fnmsub", "rcp",
+                                      "rsqrt", "div", "sqrt", "pmul", NULL};
+    static const char *const add[] = {"add", "sub", "min", "max", "cmp", NULL};
+    int cls = 0;
+    const char *last = strrchr(operands, ',');
+    last = last ? last + 1 : operands;
+    if (strchr(operands, '(') && !starts_with(mnemonic, "lea") && !starts_with(mnemonic, "nop")) {
+        bool store = strchr(last, '(') && !any_prefix(mnemonic, reads_only);
+        if (!store)
+            cls |= KM_LOAD;
+        else if (starts_with(mnemonic, "vmaskmov") || starts_with(mnemonic, "vpmaskmov"))
+            cls |= KM_MASKSTORE;
+        else
+            cls |= KM_STORE;
+    }
     bool vec = strstr(operands, "%xmm") || strstr(operands, "%ymm") || strstr(operands, "%zmm") ||
                strstr(operands, "%k") || mnemonic[0] == 'k';
-    if (!vec) return 0;
-    int zmm = strstr(operands, "%zmm") ? KM_ZMM : 0;
+    if (!vec) return cls;
+    if (strstr(operands, "%zmm")) cls |= KM_ZMM;
     const char *m = mnemonic[0] == 'v' ? mnemonic + 1 : mnemonic;
     bool memory = strchr(operands, '(') != NULL;
-    bool shuffle_like = starts_with(m, "movmsk") || starts_with(m, "movshdup") ||
-                        starts_with(m, "movsldup") || starts_with(m, "movddup") ||
-                        starts_with(m, "movhlps") || starts_with(m, "movlhps") ||
-                        starts_with(m, "maskmov");
-    if (starts_with(m, "mov") && !shuffle_like) return zmm;
-    if ((starts_with(m, "broadcast") || starts_with(m, "pbroadcast")) && memory) return zmm;
-    return KM_VECTOR | zmm;
+    if (starts_with(m, "mov") && !any_prefix(m, shuffle_like)) return cls;
+    if ((starts_with(m, "broadcast") || starts_with(m, "pbroadcast")) && memory) return cls;
+    if (starts_with(m, "maskmov") || starts_with(m, "pmaskmov")) return cls;
+    cls |= KM_VECTOR;
+    if (any_prefix(m, mul)) cls |= KM_MUL;
+    if (any_prefix(m, add)) cls |= KM_ADD;
+    return cls;
 }
 
 static int cmp_uintptr(const void *a, const void *b)
@@ -352,7 +376,7 @@ bool km_disasm_load(uintptr_t lo, uintptr_t hi, km_disasm *d, char *why, size_t 
             cap = ncap;
         }
         d->addr[d->count] = (uintptr_t)a + bias;
-        d->cls[d->count] = (unsigned char)classify(mnemonic, ops);
+        d->cls[d->count] = (unsigned char)km_classify(mnemonic, ops);
         d->count++;
     }
     int status = pclose(p);

@@ -24,8 +24,6 @@
 
 typedef struct km_core {
     int issue_width;     /* macro-ops dispatched per cycle */
-    int vector_pipes;    /* FP/vector execution pipes (0: unknown) */
-    bool zmm_half_rate;  /* 512-bit operations occupy a pipe for two cycles */
     const char *name;    /* "AMD Zen 5 (family 1Ah)" */
     const char *why;     /* where the constants come from */
     bool known;          /* false: a default was assumed */
@@ -52,12 +50,22 @@ typedef struct km_site {
 /* Copies the table (sorted by address) into a malloc'ed array. */
 size_t km_trace_sites(km_site **sites);
 
-/* Instruction classes from a disassembly of this executable (objdump). */
+/* Instruction classes from a disassembly of this executable (objdump),
+ * one bit each; an instruction may have several (vaddps (%rax),... is
+ * KM_VECTOR | KM_ADD | KM_LOAD). */
 enum {
-    KM_VECTOR = 1, /* occupies an FP/vector pipe: arithmetic, compares, blends,
-                      shuffles, mask operations; not loads, stores, reg moves */
-    KM_ZMM = 2,    /* operates on 512-bit registers */
+    KM_VECTOR = 1,      /* occupies an FP/vector pipe: arithmetic, compares, blends,
+                           shuffles, mask operations; not loads, stores, reg moves */
+    KM_ZMM = 2,         /* operates on 512-bit registers */
+    KM_MUL = 4,         /* multiply, FMA, reciprocal, divide, square root */
+    KM_ADD = 8,         /* floating-point add, subtract, min, max, compare */
+    KM_LOAD = 16,       /* reads memory (any register kind) */
+    KM_STORE = 32,      /* writes memory with a plain or opmask store */
+    KM_MASKSTORE = 64,  /* writes memory through a vector mask (vmaskmovps) */
 };
+/* The classes of one instruction as objdump -d prints it (AT&T syntax:
+ * "vfmadd231ps", "%ymm1,%ymm2,%ymm3"). */
+int km_classify(const char *mnemonic, const char *operands);
 typedef struct km_disasm {
     size_t count;
     uintptr_t *addr; /* sorted runtime addresses */

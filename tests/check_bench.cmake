@@ -1,5 +1,6 @@
 # Smoke test of the main job's benchmark: `lanes bench kernels --quick --csv`
-# must exit 0 and write a row for every set this CPU runs.
+# must exit 0 and write a row for every set this CPU runs, each naming the
+# resource that bounds it where the bound could be modelled.
 #
 #   cmake -DCLI=<lanes> -DCSV=<file> -P check_bench.cmake
 #
@@ -48,12 +49,29 @@ list(FIND columns isa isa_column)
 if(isa_column LESS 0)
   fail("the CSV header has no isa column: ${header}")
 endif()
+list(FIND columns bound_resource resource_column)
+if(resource_column LESS 0)
+  fail("the CSV header has no bound_resource column: ${header}")
+endif()
+set(resources issue mul add mul+add vector load store maskstore)
 set(seen "")
+set(named 0)
 foreach(row IN LISTS rows)
   string(REPLACE "," ";" cells "${row}")
   list(GET cells ${isa_column} isa)
   list(APPEND seen ${isa})
+  list(GET cells ${resource_column} resource)
+  if(NOT resource STREQUAL "")
+    if(NOT resource IN_LIST resources)
+      fail("row '${row}': bound_resource '${resource}' is none of ${resources}")
+    endif()
+    math(EXPR named "${named} + 1")
+  endif()
 endforeach()
+# Empty only where the output says why (no instruction counts, no AVX).
+if(named EQUAL 0 AND NOT out MATCHES "UNAVAILABLE")
+  fail("no row names the resource that bounds it, and the output says not why")
+endif()
 foreach(isa IN LISTS supported)
   if(NOT isa IN_LIST seen)
     fail("no CSV row for supported set '${isa}'")

@@ -229,6 +229,13 @@ if(lanes_cli_target)
   # RUN_SERIAL: timing loops pinned to one core; not alongside other tests.
   set_tests_properties(cli.bench_kernels_quick PROPERTIES
     LABELS cli TIMEOUT 300 RUN_SERIAL TRUE ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
+
+  # The instruction classes its resource bound charges.
+  add_executable(test_kernel_model ${CMAKE_CURRENT_SOURCE_DIR}/test_kernel_model.c
+                 ${PROJECT_SOURCE_DIR}/bench/kernel_model.c ${PROJECT_SOURCE_DIR}/bench/cli_common.c)
+  target_link_libraries(test_kernel_model PRIVATE lanes_internal ${CMAKE_DL_LIBS})
+  add_test(NAME cli.kernel_model_classes COMMAND test_kernel_model)
+  set_tests_properties(cli.kernel_model_classes PROPERTIES LABELS cli TIMEOUT 60)
 else()
   message(STATUS "lanes: no CLI target yet; dispatch and qemu tests of `lanes info` not added")
 endif()
