@@ -305,6 +305,10 @@ foreach(isa IN LISTS LANES_BUILT_ISAS)
   endif()
 endforeach()
 
+# The pipe-rate probes of `lanes bench kernels` (bench/pipe_probes_*.c)
+lanes_hygiene_test(hygiene.isa.pipe_probes_avx isa avx $<TARGET_OBJECTS:lanes_pipe_probes_avx>)
+lanes_hygiene_test(hygiene.isa.pipe_probes_fma isa avx2 $<TARGET_OBJECTS:lanes_pipe_probes_fma>)
+
 # The checks must be able to fail: each one is also run where it has to find
 # something (a wider set's objects, another set's suffix, a constructor).
 set(lanes_hygiene_catches
