@@ -47,6 +47,7 @@ typedef struct {
     int packet;
     double util_op, util_packet, seconds, mrays;
     double ray_count, packets, live_node, live_leaf;
+    double util_node, util_leaf; /* single rays: filled lanes of node and leaf tests */
 } study_row;
 
 typedef struct {
@@ -67,6 +68,7 @@ static study_row *add_row(row_list *l)
     memset(r, 0, sizeof *r);
     r->util_op = r->util_packet = r->seconds = r->mrays = NAN;
     r->ray_count = r->packets = r->live_node = r->live_leaf = NAN;
+    r->util_node = r->util_leaf = NAN;
     return r;
 }
 
@@ -192,6 +194,9 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
     progress(what);
 }
 
+/* a / b, NaN when nothing was counted */
+static double ratio(uint64_t a, uint64_t b) { return b ? (double)a / (double)b : NAN; }
+
 /* node_width 0: the set's own; else the width sweep's row ("wide-nodes"). */
 static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,
                            lanes_isa isa, lanes_scheme scheme, int node_width, const study_plan *plan)
@@ -207,12 +212,23 @@ static void measure_single(row_list *rows, const lanes_scene *scene, const lanes
     po.base.node_width = node_width;
     uint64_t rays = 0;
     double seconds = timed(scene, accel, false, &po, plan, &rays);
+    /* then one counting run: how full the node and leaf tests were */
+    lanes_render_result counted;
+    lanes_error err;
+    po.base.count = true;
+    if (lanes_render(scene, accel, &po.base, &counted, &err) != LANES_OK) cli_fail("study: %s", err.message);
+    const lanes_trace_stats *st = &counted.stats;
     study_row *all = add_row(rows);
     fill_common(all, scene, "all", node_width ? "wide-nodes" : lanes_scheme_name(scheme), isa, "none", 0, 1);
     if (scheme == LANES_SCHEME_WIDE) all->node_width = accel->wide.width;
     all->seconds = seconds;
     all->mrays = (double)rays / seconds * 1e-6;
     all->ray_count = (double)rays;
+    all->util_node = ratio(st->node_lanes.active_lanes, st->node_lanes.lane_slots);
+    all->util_leaf = ratio(st->leaf_lanes.active_lanes, st->leaf_lanes.lane_slots);
+    all->util_op = ratio(st->node_lanes.active_lanes + st->leaf_lanes.active_lanes,
+                         st->node_lanes.lane_slots + st->leaf_lanes.lane_slots);
+    lanes_render_result_free(&counted);
     char what[160];
     if (scheme == LANES_SCHEME_WIDE)
         snprintf(what, sizeof what, "%s: wide at %s, %d-wide nodes", scene->name, lanes_isa_name(isa),
@@ -329,7 +345,8 @@ static void write_csv(const char *path, const row_list *rows)
 {
     FILE *f = cli_create_file("study", path);
     fprintf(f, "scene,rays,scheme,isa,lanes,queue,queue_min,packet,util_op,util_packet,seconds,mrays,"
-               "ray_count,packets,live_rays_per_node,live_rays_per_leaf,family,emulated,node_width\n");
+               "ray_count,packets,live_rays_per_node,live_rays_per_leaf,family,emulated,node_width,util_node,"
+               "util_leaf\n");
     for (size_t i = 0; i < rows->n; i++) {
         const study_row *r = &rows->rows[i];
         fprintf(f, "%s,%s,%s,%s,%d,%s,%d,%d,", r->scene, r->rays, r->scheme, r->isa, r->lanes, r->queue,
@@ -340,7 +357,11 @@ static void write_csv(const char *path, const row_list *rows)
             if (k) fputc(',', f);
             csv_number(f, v[k]);
         }
-        fprintf(f, ",%s,%d,%d\n", r->family, r->emulated, r->node_width);
+        fprintf(f, ",%s,%d,%d,", r->family, r->emulated, r->node_width);
+        csv_number(f, r->util_node);
+        fputc(',', f);
+        csv_number(f, r->util_leaf);
+        fputc('\n', f);
     }
     cli_finish_file("study", path, f);
 }
@@ -365,7 +386,11 @@ static void write_json(FILE *f, const row_list *rows, const char *dir)
         cli_json_number(f, r->seconds);
         fprintf(f, ", \"mrays\": ");
         cli_json_number(f, r->mrays);
-        fprintf(f, ", \"node_width\": %d}", r->node_width);
+        fprintf(f, ", \"node_width\": %d, \"util_node\": ", r->node_width);
+        cli_json_number(f, r->util_node);
+        fprintf(f, ", \"util_leaf\": ");
+        cli_json_number(f, r->util_leaf);
+        fprintf(f, "}");
     }
     fprintf(f, "\n]}\n");
 }
@@ -613,7 +638,9 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
 
     fprintf(f, "\n## Node width: single rays through the wide BVH (all ray types), Mrays/s\n\n"
                "Every set traverses the trees of every node width from its lane count up, a node's children "
-               "in width / lanes vectors; * marks the set's own width, its default. The last column is 16 "
+               "in width / lanes vectors; * marks the set's own width, its default. In parentheses, the SIMD "
+               "utilisation of its node tests / leaf tests: lanes holding a real child or triangle over lane "
+               "slots, from one counting run over the same rays. The last column is 16 "
                "lanes over 8 of the same instruction family on the same 16-wide tree.\n\n"
                "| Scene | ISA | 4-wide | 8-wide | 16-wide | 16 lanes / 8 (16-wide) |\n|---|---|---|---|---|---|\n");
     for (int s = 0; s < nscenes; s++)
@@ -624,7 +651,8 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
             for (int nw = 4; nw <= 16; nw *= 2) {
                 const study_row *r = find_nodes(rows, scenes[s], lanes_isa_name(i), nw);
                 if (r)
-                    fprintf(f, " %.3f%s |", r->mrays, nw == own->wide_width ? "*" : "");
+                    fprintf(f, " %.3f%s (%.0f%% / %.0f%%) |", r->mrays, nw == own->wide_width ? "*" : "",
+                            100 * r->util_node, 100 * r->util_leaf);
                 else
                     fprintf(f, " |");
             }

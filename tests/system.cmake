@@ -207,6 +207,18 @@ if(lanes_cli_target)
               $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test} ${LANES_IDIFF})
     list(APPEND lanes_output_tests cli.paths_embree)
   endif()
+  # lanes study: the Node width table and its single-ray rows' utilisation
+  # (columns 20, 21), a fraction in (0, 1]; the scalar set tests only real
+  # triangles, so its leaf utilisation is exactly 1.
+  add_test(NAME cli.study
+    COMMAND bash -c "set -e; rm -rf \"$1/study\"; \"$0\" study --reps 1 --size 32x32 --out \"$1/study\" > /dev/null 2>&1; \
+                     grep -q '^## Node width' \"$1/study/tables.md\"; grep -q '% / [0-9]*%) |' \"$1/study/tables.md\"; \
+                     awk -F, 'NR == 1 && ($20 != \"util_node\" || $21 != \"util_leaf\") { bad = 1 } \
+                              NR > 1 && ($3 == \"wide\" || $3 == \"wide-nodes\") { n++; \
+                                if (!($20 > 0 && $20 <= 1 && $21 > 0 && $21 <= 1)) bad = 1; if ($4 == \"scalar\" && $21 != 1) bad = 1 } \
+                              END { exit bad || n < 3 }' \"$1/study/measurements.csv\""
+            $<TARGET_FILE:${lanes_cli_target}> ${lanes_out_test})
+  list(APPEND lanes_output_tests cli.study)
   # lanes study --paths: its four experiments in the CSV, the tables.
   add_test(NAME cli.study_paths
     COMMAND bash -c "set -e; rm -rf \"$1/study_paths\"; \"$0\" study --paths --reps 1 --size 32x32 --out \"$1/study_paths\" > /dev/null; \

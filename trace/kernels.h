@@ -133,6 +133,22 @@ typedef struct lanes_trace_stats {
     lanes_lane_stats leaf_lanes; /* lanes of the triangle tests that held a real triangle */
 } lanes_trace_stats;
 
+/* Adds the counters of b into a (per-thread counters summed at the end). */
+static inline void lanes_trace_stats_add(lanes_trace_stats *a, const lanes_trace_stats *b)
+{
+    a->rays += b->rays;
+    a->nodes_visited += b->nodes_visited;
+    a->leaves_visited += b->leaves_visited;
+    a->triangles_tested += b->triangles_tested;
+    const lanes_lane_stats *from[2] = {&b->node_lanes, &b->leaf_lanes};
+    lanes_lane_stats *to[2] = {&a->node_lanes, &a->leaf_lanes};
+    for (int i = 0; i < 2; i++) {
+        to[i]->vector_ops += from[i]->vector_ops;
+        to[i]->lane_slots += from[i]->lane_slots;
+        to[i]->active_lanes += from[i]->active_lanes;
+    }
+}
+
 struct lanes_bvh2;
 struct lanes_wbvh;
 

@@ -84,9 +84,10 @@ typedef struct {
 typedef struct {
     uint64_t camera, shadow, secondary;
     uint64_t by_depth[LANES_MAX_DEPTH + 1];
+    lanes_trace_stats traversal; /* with opt->count */
 } ray_counts;
 
-static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float tfar)
+static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float tfar, ray_counts *count)
 {
     if (job->opt->api_accel) {
         lanes_ray1 q = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, tnear, tfar};
@@ -98,15 +99,16 @@ static lanes_hit trace(const render_job *job, vec3 o, vec3 d, float tnear, float
     }
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, tnear, tfar};
     lanes_hit h;
+    lanes_trace_stats *stats = job->opt->count ? &count->traversal : NULL;
     lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->trace_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &h, NULL);
+        job->k->trace_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &h, stats);
     else
-        job->k->trace_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &h, NULL);
+        job->k->trace_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &h, stats);
     return h;
 }
 
-static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar)
+static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar, ray_counts *count)
 {
     if (job->opt->api_accel) {
         lanes_ray1 q = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, 0.0f, tfar};
@@ -116,11 +118,12 @@ static bool occluded(const render_job *job, vec3 o, vec3 d, float tfar)
     }
     lanes_ray r = {{o.x, o.y, o.z}, {d.x, d.y, d.z}, {0, 0, 0}, 0.0f, tfar};
     uint8_t hit = 0;
+    lanes_trace_stats *stats = job->opt->count ? &count->traversal : NULL;
     lanes_ray_prepare_rcp(&r, job->rcp);
     if (job->opt->scheme == LANES_SCHEME_WIDE)
-        job->k->occluded_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &hit, NULL);
+        job->k->occluded_wide(&job->accel->wide, job->opt->accuracy, &r, 1, &hit, stats);
     else
-        job->k->occluded_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, NULL);
+        job->k->occluded_bvh2(&job->accel->bvh2, job->opt->accuracy, &r, 1, &hit, stats);
     return hit != 0;
 }
 
@@ -129,7 +132,7 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
                   lanes_shadow_ray *shadow, ray_counts *count)
 {
     const lanes_scene *s = job->scene;
-    lanes_hit h = trace(job, o, d, 0.0f, INFINITY);
+    lanes_hit h = trace(job, o, d, 0.0f, INFINITY, count);
     if (h.prim == LANES_NO_HIT) return v3_mul(weight, lanes_background(d));
     lanes_surface sf = job->plan.hit_geometry ? lanes_surface_at(s, &h, d) : lanes_surface_material(s, &h);
     switch (lanes_material_whitted_kind(sf.m->kind)) {
@@ -141,7 +144,7 @@ static vec3 shade(const render_job *job, vec3 o, vec3 d, vec3 weight, int depth,
         sum = v3_add(sum, v3_mul(weight, v3_load(sf.m->emission)));
         for (int i = 0; i < n; i++) {
             count->shadow++;
-            if (!occluded(job, shadow[i].o, shadow[i].d, shadow[i].tfar)) sum = v3_add(sum, shadow[i].add);
+            if (!occluded(job, shadow[i].o, shadow[i].d, shadow[i].tfar, count)) sum = v3_add(sum, shadow[i].add);
         }
         return sum;
     }
@@ -343,6 +346,7 @@ lanes_status lanes_render(const lanes_scene *scene, const lanes_render_accel *ac
         out->shadow_rays += workers[i].count.shadow;
         out->secondary_rays += workers[i].count.secondary;
         for (int d = 0; d <= LANES_MAX_DEPTH; d++) out->secondary_by_depth[d] += workers[i].count.by_depth[d];
+        lanes_trace_stats_add(&out->stats, &workers[i].count.traversal);
     }
     free(workers);
     out->rays = out->camera_rays + out->shadow_rays + out->secondary_rays;

@@ -37,6 +37,8 @@ typedef struct lanes_render_options {
     int area_samples;    /* shadow rays per area light per hit, default 4 */
     int node_width;      /* the wide scheme's node width (lanes_kernels_for_width);
                           * 0: the set's own */
+    bool count;          /* the traversal's counters into the result's stats
+                          * (slower: for a counting run, not a timed one) */
     /* Called from worker threads with the fraction done; may be NULL. */
     void (*progress)(void *ctx, double fraction);
     void *progress_ctx;
@@ -55,6 +57,7 @@ typedef struct lanes_render_result {
     uint64_t rays;          /* every ray traced: camera, shadow, secondary */
     uint64_t camera_rays, shadow_rays, secondary_rays;
     uint64_t secondary_by_depth[LANES_MAX_DEPTH + 1]; /* reflection/refraction rays of each bounce */
+    lanes_trace_stats stats; /* every ray's traversal, with options.count; else zero */
 } lanes_render_result;
 
 /* The acceleration structure a render needs: the wide BVH of a set for the
