@@ -222,8 +222,8 @@ LANES_BODY void finish_alone(packet_state *s, int i, uint32_t ref, float t, bool
                              lanes_trace_stats *stats)
 {
     const lanes_ray *r = &s->rays[i];
-    int slab;
-    node_ray nr = node_ray_setup(r, s->accuracy, s->prec.exit_scale, &slab);
+    node_ray nr;
+    const int slab = node_ray_init(&nr, r, s->accuracy, s->prec.exit_scale);
     const wide_setup *w = ray_setup(s, i);
     const wide_entry e = {ref, t};
     if (any) {

@@ -42,21 +42,20 @@ typedef struct {
     wide_setup w[GROUP];
 } ray_group;
 
-/* Ray i of the group as the node test takes a ray; the compiler keeps
- * only the broadcasts the slab form reads. */
-LANES_BODY node_ray group_ray(const ray_group *g, int i, vfloat exit_scale)
+/* Ray i of the group as the node test takes a ray, filled in place (see
+ * node_ray_init); the compiler keeps only the broadcasts the slab form
+ * reads. */
+LANES_BODY void group_ray(node_ray *r, const ray_group *g, int i, vfloat exit_scale)
 {
-    node_ray r;
     for (int a = 0; a < 3; a++) {
-        r.near[a] = g->near[a];
-        r.far[a] = g->far[a];
-        r.o[a] = vf_set1(g->o[a][i]);
-        r.rd[a] = vf_set1(g->rd[a][i]);
-        r.ord[a] = vf_set1(g->o[a][i] * g->rd[a][i]);
+        r->near[a] = g->near[a];
+        r->far[a] = g->far[a];
+        r->o[a] = vf_set1(g->o[a][i]);
+        r->rd[a] = vf_set1(g->rd[a][i]);
+        r->ord[a] = vf_set1(g->o[a][i] * g->rd[a][i]);
     }
-    r.tnear = vf_set1(g->tnear[i]);
-    r.exit_scale = exit_scale;
-    return r;
+    r->tnear = vf_set1(g->tnear[i]);
+    r->exit_scale = exit_scale;
 }
 
 /* Where a stream's answers go: occluded[] for any hits, else hits[]. */
@@ -131,7 +130,8 @@ LANES_BODY void group_walk(const lanes_wbvh *wb, lanes_tri_algo algo, int slab, 
             for (int c = 0; c < NODE_VECTORS; c++) entered[c] = vi_zero();
             for (uint32_t todo = rays; todo; todo &= todo - 1) {
                 const int i = __builtin_ctz(todo);
-                const node_ray r = group_ray(g, i, exit_scale);
+                node_ray r;
+                group_ray(&r, g, i, exit_scale);
                 const vint bit = vi_set1((int32_t)(1u << i));
                 const vfloat tf = vf_set1(g->tfar[i]);
                 for (int c = 0; c < NODE_VECTORS; c++) {
