@@ -122,6 +122,9 @@ static void fill_common(study_row *r, const lanes_scene *scene, const char *rays
     r->packet = packet;
 }
 
+/* a / b, NaN when nothing was counted */
+static double ratio(uint64_t a, uint64_t b) { return b ? (double)a / (double)b : NAN; }
+
 /* One packet configuration: a timed run and a counting run. */
 static void measure_packets(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,
                             lanes_isa isa, lanes_packet_scheme scheme, lanes_queue_heuristic queue,
@@ -167,14 +170,14 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
                     plan->packet);
         uint64_t tl = s->box_ops.active_lanes + s->tri_ops.active_lanes;
         uint64_t ts = s->box_ops.lane_slots + s->tri_ops.lane_slots;
-        row->util_op = ts ? (double)tl / (double)ts : NAN;
+        row->util_op = ratio(tl, ts);
         row->util_packet = m.packets[t] ? m.packet_util_sum[t] / (double)m.packets[t] : NAN;
         row->seconds = seconds;
         row->mrays = (double)rays / seconds * 1e-6;
         row->ray_count = (double)m.rays[t];
         row->packets = (double)m.packets[t];
-        row->live_node = s->nodes_visited ? (double)s->node_live_rays / (double)s->nodes_visited : NAN;
-        row->live_leaf = s->leaves_visited ? (double)s->leaf_live_rays / (double)s->leaves_visited : NAN;
+        row->live_node = ratio(s->node_live_rays, s->nodes_visited);
+        row->live_leaf = ratio(s->leaf_live_rays, s->leaves_visited);
         live += tl;
         slots += ts;
         packets += m.packets[t];
@@ -187,15 +190,12 @@ static void measure_packets(row_list *rows, const lanes_scene *scene, const lane
                             scheme_name, lanes_isa_name(isa), qname, queue_min, k,
                             (unsigned long long)m.packets_of_size[t][k]);
     }
-    all->util_op = slots ? (double)live / (double)slots : NAN;
+    all->util_op = ratio(live, slots);
     all->util_packet = packets ? util_sum / (double)packets : NAN;
     all->ray_count = ray_total;
     all->packets = (double)packets;
     progress(what);
 }
-
-/* a / b, NaN when nothing was counted */
-static double ratio(uint64_t a, uint64_t b) { return b ? (double)a / (double)b : NAN; }
 
 /* node_width 0: the set's own; else the width sweep's row ("wide-nodes"). */
 static void measure_single(row_list *rows, const lanes_scene *scene, const lanes_render_accel *accel,

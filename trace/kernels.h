@@ -123,6 +123,14 @@ typedef struct lanes_lane_stats {
     uint64_t active_lanes; /* lanes that carried a real ray or primitive */
 } lanes_lane_stats;
 
+/* Adds the counters of b into a (per-thread counters summed at the end). */
+static inline void lanes_lane_stats_add(lanes_lane_stats *a, const lanes_lane_stats *b)
+{
+    a->vector_ops += b->vector_ops;
+    a->lane_slots += b->lane_slots;
+    a->active_lanes += b->active_lanes;
+}
+
 /* What a traversal did, for the utilisation studies. */
 typedef struct lanes_trace_stats {
     uint64_t rays;
@@ -140,13 +148,8 @@ static inline void lanes_trace_stats_add(lanes_trace_stats *a, const lanes_trace
     a->nodes_visited += b->nodes_visited;
     a->leaves_visited += b->leaves_visited;
     a->triangles_tested += b->triangles_tested;
-    const lanes_lane_stats *from[2] = {&b->node_lanes, &b->leaf_lanes};
-    lanes_lane_stats *to[2] = {&a->node_lanes, &a->leaf_lanes};
-    for (int i = 0; i < 2; i++) {
-        to[i]->vector_ops += from[i]->vector_ops;
-        to[i]->lane_slots += from[i]->lane_slots;
-        to[i]->active_lanes += from[i]->active_lanes;
-    }
+    lanes_lane_stats_add(&a->node_lanes, &b->node_lanes);
+    lanes_lane_stats_add(&a->leaf_lanes, &b->leaf_lanes);
 }
 
 struct lanes_bvh2;

@@ -700,12 +700,8 @@ lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_ac
                 a->node_live_rays += b->node_live_rays, a->leaf_live_rays += b->leaf_live_rays;
                 a->frustum_culled += b->frustum_culled, a->corner_all_hit += b->corner_all_hit;
                 a->triangles_culled += b->triangles_culled, a->triangles_tested += b->triangles_tested;
-                a->box_ops.vector_ops += b->box_ops.vector_ops;
-                a->box_ops.lane_slots += b->box_ops.lane_slots;
-                a->box_ops.active_lanes += b->box_ops.active_lanes;
-                a->tri_ops.vector_ops += b->tri_ops.vector_ops;
-                a->tri_ops.lane_slots += b->tri_ops.lane_slots;
-                a->tri_ops.active_lanes += b->tri_ops.active_lanes;
+                lanes_lane_stats_add(&a->box_ops, &b->box_ops);
+                lanes_lane_stats_add(&a->tri_ops, &b->tri_ops);
             }
         }
         worker_free(w);
