@@ -168,12 +168,22 @@ void lanes_wbvh_free(lanes_wbvh *w);
 #define LANES_WBVH_SHARED_MAX ((size_t)INT32_MAX / 3)
 lanes_status lanes_wbvh_share(lanes_wbvh *w, const float *verts, const uint32_t *indices, lanes_error *err);
 
+/* What the wide tree's SAH charges a leaf block, in units of the options'
+ * intersect_cost: a block's triangle test takes about twice the vector
+ * operations of a node's box test of as many lanes. Against 1, on Zen 4
+ * (lanes compare, alternating runs): sponza-bunny's 8-wide tree visits 2.7
+ * leaves a ray instead of 3.1 and traces primary rays 1.10-1.13x faster;
+ * dragon's trees come out the same; the other rows and 16-wide trees move
+ * no more than dragon's unchanged ones do between runs. */
+#define LANES_WBVH_BLOCK_COST 2.0f
+
 /* The wide BVH the kernel sets of node width `width` traverse, built for
  * it from the scene: a BVH2 whose leaves fill at most one block of `width`
- * and whose SAH charges a leaf per block (one vector step for a set of that
- * many lanes; the scalar set loops over its 4-wide blocks), collapsed, then
- * freed. base gives the other options (bins, costs, threads; NULL: the
- * defaults). build_seconds covers both steps. */
+ * and whose SAH charges a leaf LANES_WBVH_BLOCK_COST x intersect_cost per
+ * block (one vector step for a set of that many lanes; the scalar set loops
+ * over its 4-wide blocks), collapsed, then freed. base gives the other
+ * options (bins, costs, threads; NULL: the defaults). build_seconds covers
+ * both steps. */
 lanes_status lanes_wbvh_build(const lanes_scene *scene, int width, const lanes_bvh_build_options *base,
                               lanes_wbvh *out, lanes_error *err);
 

@@ -415,6 +415,7 @@ lanes_status lanes_wbvh_build(const lanes_scene *scene, int width, const lanes_b
     else lanes_bvh_default_options(&o);
     o.max_leaf_size = width;
     o.sah_block = width;
+    o.intersect_cost *= LANES_WBVH_BLOCK_COST;
     lanes_bvh2 bvh;
     lanes_status status = lanes_bvh2_build(scene, &o, &bvh, err);
     if (status != LANES_OK) return status;
