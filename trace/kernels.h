@@ -194,6 +194,23 @@ typedef struct lanes_packet_stats {
     lanes_lane_stats box_ops, tri_ops;
 } lanes_packet_stats;
 
+/* a += b, field by field (per-thread counts summed). */
+static inline void lanes_packet_stats_add(lanes_packet_stats *a, const lanes_packet_stats *b)
+{
+    a->packets += b->packets;
+    a->rays += b->rays;
+    a->nodes_visited += b->nodes_visited;
+    a->leaves_visited += b->leaves_visited;
+    a->node_live_rays += b->node_live_rays;
+    a->leaf_live_rays += b->leaf_live_rays;
+    a->frustum_culled += b->frustum_culled;
+    a->corner_all_hit += b->corner_all_hit;
+    a->triangles_culled += b->triangles_culled;
+    a->triangles_tested += b->triangles_tested;
+    lanes_lane_stats_add(&a->box_ops, &b->box_ops);
+    lanes_lane_stats_add(&a->tri_ops, &b->tri_ops);
+}
+
 /* The kernels of one instruction set. Every entry is filled. */
 typedef struct lanes_kernels {
     lanes_isa isa;

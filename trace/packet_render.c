@@ -693,15 +693,7 @@ lanes_status lanes_packet_render(const lanes_scene *scene, const lanes_render_ac
                 metrics->packet_util_sum[t] += w->m.packet_util_sum[t];
                 for (int k = 0; k <= LANES_PACKET_MAX_RAYS; k++)
                     metrics->packets_of_size[t][k] += w->m.packets_of_size[t][k];
-                lanes_packet_stats *a = &metrics->stats[t];
-                const lanes_packet_stats *b = &w->m.stats[t];
-                a->packets += b->packets, a->rays += b->rays;
-                a->nodes_visited += b->nodes_visited, a->leaves_visited += b->leaves_visited;
-                a->node_live_rays += b->node_live_rays, a->leaf_live_rays += b->leaf_live_rays;
-                a->frustum_culled += b->frustum_culled, a->corner_all_hit += b->corner_all_hit;
-                a->triangles_culled += b->triangles_culled, a->triangles_tested += b->triangles_tested;
-                lanes_lane_stats_add(&a->box_ops, &b->box_ops);
-                lanes_lane_stats_add(&a->tri_ops, &b->tri_ops);
+                lanes_packet_stats_add(&metrics->stats[t], &w->m.stats[t]);
             }
         }
         worker_free(w);
