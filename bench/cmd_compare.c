@@ -100,6 +100,7 @@ typedef struct {
     lanes_rays soa;
     float *tnear0, *tfar0, *u, *v;
     uint32_t *prim;
+    lanes_trace_stats *stats; /* the counted run (--stats); NULL when timed */
 } lanes_job;
 
 /* Packets of consecutive rays: CHUNK is a multiple of the packet size, so a
@@ -172,31 +173,29 @@ static void lanes_work(void *ctx, size_t b, size_t e)
     }
     if (j->stream) {
         if (j->occlusion)
-            j->k->occluded_stream(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
+            j->k->occluded_stream(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, j->stats);
         else
-            j->k->trace_stream(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
+            j->k->trace_stream(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, j->stats);
         return;
     }
     if (j->hybrid) {
         if (j->occlusion)
-            j->k->occluded_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, NULL);
+            j->k->occluded_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->occluded + b, j->stats);
         else
-            j->k->trace_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
+            j->k->trace_hybrid(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, j->stats);
         return;
     }
     if (j->occlusion) {
         if (j->scheme == LANES_SCHEME_WIDE)
             j->k->occluded_wide(j->wide, j->accuracy, j->rays + b, e - b,
-                                j->occluded + b, NULL);
+                                j->occluded + b, j->stats);
         else
-            j->k->occluded_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->occluded + b,
-                                NULL);
+            j->k->occluded_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->occluded + b, j->stats);
     } else {
         if (j->scheme == LANES_SCHEME_WIDE)
-            j->k->trace_wide(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b,
-                             NULL);
+            j->k->trace_wide(j->wide, j->accuracy, j->rays + b, e - b, j->hits + b, j->stats);
         else
-            j->k->trace_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b, NULL);
+            j->k->trace_bvh2(j->bvh2, j->accuracy, j->rays + b, e - b, j->hits + b, j->stats);
     }
 }
 
@@ -222,6 +221,9 @@ typedef struct {
     int threads;
     double mrays;
     double ratio; /* against the best Embree row of the same kind and threads */
+    /* --stats, lanes rows but packet: per ray, from one counted run */
+    bool counted;
+    double nodes, leaves, triangles, node_util, leaf_util;
 } row;
 
 typedef struct {
@@ -258,6 +260,7 @@ typedef struct {
     const char *scene_spec;
     const char *csv;
     bool json, quick;
+    bool stats;        /* traversal counters per ray, from one more (untimed) run */
     int threads;       /* all-threads figure; 1 means single thread only */
     long rays;         /* camera rays, approximately */
     int reps;
@@ -331,6 +334,21 @@ static config *add_lanes_config(config *cf, lanes_job j, const char *name, size_
     snprintf(cf->isa, sizeof cf->isa, "%s", j.k->name);
     return cf;
 }
+
+/* The traversal counters of a lanes configuration over the same rays in
+ * the same chunks as a timed run, on this thread: the counting copies of
+ * the kernels, so never timed. */
+static void count_config(const config *cf, size_t n, lanes_trace_stats *out)
+{
+    lanes_job j = cf->lj;
+    memset(out, 0, sizeof *out);
+    j.stats = out;
+    unsigned csr = lanes_fp_fast_enter();
+    for (size_t b = 0; b < n; b += CHUNK) lanes_work(&j, b, b + CHUNK < n ? b + CHUNK : n);
+    lanes_fp_restore(csr);
+}
+
+static double per(uint64_t a, uint64_t b) { return b ? (double)a / (double)b : 0.0; }
 
 static void run_config(lanes_pool *p, config *cf, size_t n, double *seconds)
 {
@@ -426,6 +444,13 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             for (int i = 0; i < ncfg; i++)
                 run_config(&c->pools[pi], &cfg[i], n, round < 0 ? NULL : &cfg[i].seconds[pi][round]);
     if (lanes_embree_error(c->embree)[0]) cli_fail("compare: %s", lanes_embree_error(c->embree));
+    /* packets count rays per lane, not children and triangles: lanes study
+     * reports theirs */
+    lanes_trace_stats *counts = calloc((size_t)ncfg, sizeof *counts);
+    if (!counts) cli_fail("compare: out of memory");
+    if (c->opt.stats)
+        for (int i = 0; i < ncfg; i++)
+            if (!cfg[i].embree && !cfg[i].lj.packet) count_config(&cfg[i], n, &counts[i]);
 
     /* rows: per thread count, lanes then Embree; ratios against the best
      * Embree row of the same rays and threads */
@@ -442,6 +467,13 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             w->threads = c->pools[pi].threads;
             w->mrays = s > 0 ? (double)n / s * 1e-6 : 0.0;
             if (w->embree && w->mrays > best) best = w->mrays;
+            const lanes_trace_stats *t = &counts[i];
+            w->counted = c->opt.stats && !cfg[i].embree && !cfg[i].lj.packet;
+            w->nodes = per(t->nodes_visited, t->rays);
+            w->leaves = per(t->leaves_visited, t->rays);
+            w->triangles = per(t->triangles_tested, t->rays);
+            w->node_util = per(t->node_lanes.active_lanes, t->node_lanes.lane_slots);
+            w->leaf_util = per(t->leaf_lanes.active_lanes, t->leaf_lanes.lane_slots);
         }
         for (size_t i = first; i < c->res.count; i++)
             c->res.rows[i].ratio = best > 0 ? c->res.rows[i].mrays / best : 0.0;
@@ -497,6 +529,7 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
     }
     for (int m = 0; m < LANES_EMBREE_METHOD_COUNT; m++)
         if (have_batch[m]) lanes_embree_batch_free(&batches[m]);
+    free(counts);
     free(cfg);
     free(mode_rays);
 }
@@ -509,6 +542,21 @@ static void print_table(FILE *out, const compare *c)
         const row *w = &c->res.rows[i];
         fprintf(out, "%-17s %-7s %-24s %-10s %7d %10.2f %9.2f\n", kind_names[w->kind],
                 w->embree ? "embree" : "lanes", w->method, w->isa, w->threads, w->mrays, w->ratio);
+    }
+}
+
+static void print_counts(FILE *out, const compare *c)
+{
+    fprintf(out, "\ntraversal per ray (lanes, one counted run of the same rays: node and leaf visits, a\n"
+                 "packet's or group's visit once; triangles tested; utilisation: lanes holding a\n"
+                 "real child or triangle over lane slots of the node and triangle tests):\n");
+    fprintf(out, "%-17s %-24s %-10s %8s %8s %10s %10s %10s\n", "rays", "method", "isa", "nodes", "leaves",
+            "triangles", "node util", "leaf util");
+    for (size_t i = 0; i < c->res.count; i++) {
+        const row *w = &c->res.rows[i];
+        if (!w->counted || w->threads != 1) continue; /* the same counts on every pool's row */
+        fprintf(out, "%-17s %-24s %-10s %8.2f %8.2f %10.2f %10.3f %10.3f\n", kind_names[w->kind], w->method,
+                w->isa, w->nodes, w->leaves, w->triangles, w->node_util, w->leaf_util);
     }
 }
 
@@ -564,6 +612,10 @@ static void print_json(const compare *c, double embree_build)
         printf(", \"isa\": ");
         cli_json_string(stdout, w->isa);
         if (!w->embree) printf(", \"node_width\": %d", set_kernels(c, lanes_isa_from_name(w->isa))->wide_width);
+        if (w->counted)
+            printf(", \"per_ray\": {\"nodes\": %.4f, \"leaves\": %.4f, \"triangles\": %.4f, "
+                   "\"node_utilization\": %.4f, \"leaf_utilization\": %.4f}",
+                   w->nodes, w->leaves, w->triangles, w->node_util, w->leaf_util);
         printf(", \"threads\": %d, \"mrays\": %.4f, \"ratio\": %.4f}%s\n", w->threads, w->mrays,
                w->ratio, i + 1 < c->res.count ? "," : "");
     }
@@ -583,7 +635,7 @@ static const char usage[] =
     "usage: lanes compare [SCENE] [--isa NAME] [--embree-isa NAME] [--threads N]\n"
     "                     [--rays N] [--reps N] [--accuracy M] [--scale S]\n"
     "                     [--translate T] [--node-width N] [--csv FILE] [--json]\n"
-    "                     [--quick]\n"
+    "                     [--stats] [--quick]\n"
     "\n"
     "Traces the same rays through lanes (every supported set; \"single\" = BVH2,\n"
     "\"wide\" = the set's wide BVH (or --node-width's), \"hybrid\" = packets of the\n"
@@ -606,8 +658,9 @@ static const char usage[] =
     "  --reps N           timed repetitions, median reported (default 5)\n"
     "  --accuracy M       lanes' accuracy mode: fast, default (Moller, exact 1/d) or\n"
     "                     robust (watertight, widened boxes); see lanes render --explain\n"
-    "  --scale S          the scene (triangles, lights, camera) scaled by S about the\n"
-    "  --translate T      origin, then moved by T along every axis (default 1, 0):\n"
+    "  --scale S, --translate T\n"
+    "                     the scene (triangles, lights, camera) scaled by S about the\n"
+    "                     origin, then moved by T along every axis (default 1, 0):\n"
     "                     the same rays' numerical difficulty at another scale and\n"
     "                     distance from the origin\n"
     "  --node-width N     every set on wide BVHs of N children (4, 8, 16; default:\n"
@@ -615,6 +668,10 @@ static const char usage[] =
     "                     lane count up: the sets that cannot are left out\n"
     "  --csv FILE         also write the table rows to FILE\n"
     "  --json             one JSON object on stdout instead of the table\n"
+    "  --stats            after the timed runs, one counted run of each lanes scheme\n"
+    "                     but packet (lanes study counts packets): node and leaf\n"
+    "                     visits, triangles tested and the lane utilisation of node\n"
+    "                     and triangle tests, per ray (JSON: each row's per_ray)\n"
     "  --quick            16384 camera rays, 2 repetitions (a smoke test)\n"
     "\n"
     "rays: primary (8x8 tiles, Morton order inside), shadow (primary hit to the\n"
@@ -666,6 +723,8 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
             o->json = true;
         } else if (cli_flag(&a, "--quick")) {
             o->quick = true;
+        } else if (cli_flag(&a, "--stats")) {
+            o->stats = true;
         } else if (cli_value(&a, "--csv", &v)) {
             o->csv = v;
         } else if (cli_value(&a, "--threads", &v)) {
@@ -866,6 +925,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
         print_json(c, eb);
     } else {
         print_table(stdout, c);
+        if (o->stats) print_counts(stdout, c);
         printf("\nagreement of lanes (wide, %s) with Embree (rtcIntersect1 / rtcOccluded1, Moller):\n"
                "same primitive and t within 1e-4 relative, or both miss; shadow rays: same\n"
                "occlusion. Each difference judged by the exact reference: an answer is wrong\n"

@@ -41,6 +41,7 @@ endif()
 
 # `lanes compare` end to end (label "compare"): a quick run whose JSON must
 # parse and hold every ray kind for both engines, with agreement figures; a
+# --stats run whose per-ray counters are ones a traversal can have; a
 # robust run far from the origin whose judged disagreements find lanes
 # never wrong; and bad arguments must exit with status 2. The check is a CMake script
 # generated here (string(JSON) parses the output), so no other tool is needed.
@@ -120,6 +121,68 @@ elseif(MODE STREQUAL "judged")
     message(STATUS "${isa} ${kind}: ${differ} of ${count} differ: 0 lanes wrong, ${embree_wrong} "
                    "Embree wrong, ${both_acceptable} both acceptable")
   endforeach()
+elseif(MODE STREQUAL "stats")
+  # --stats: every lanes row but packet carries its per-ray counters, and
+  # they hold what any traversal must: a single ray tests the root (at
+  # least one node a ray), a leaf tests at least one triangle, and a
+  # utilisation is a fraction of lane slots.
+  execute_process(COMMAND ${CLI} compare --quick --reps 1 --threads 1 --stats --json
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "lanes compare --stats exited with ${rc}: ${err}")
+  endif()
+  string(JSON nrows LENGTH "${out}" rows)
+  math(EXPR last "${nrows} - 1")
+  set(counted 0)
+  foreach(i RANGE ${last})
+    string(JSON engine GET "${out}" rows ${i} engine)
+    string(JSON method GET "${out}" rows ${i} method)
+    string(JSON kind GET "${out}" rows ${i} rays)
+    string(JSON isa GET "${out}" rows ${i} isa)
+    string(JSON nodes ERROR_VARIABLE e GET "${out}" rows ${i} per_ray nodes)
+    if(engine STREQUAL "embree" OR method STREQUAL "packet")
+      if(NOT e)
+        message(FATAL_ERROR "row ${i} (${engine} ${method}) has counters it cannot have")
+      endif()
+      continue()
+    endif()
+    if(e)
+      message(FATAL_ERROR "row ${i} (${kind} ${method} ${isa}) lacks per_ray")
+    endif()
+    foreach(key leaves triangles node_utilization leaf_utilization)
+      string(JSON ${key} GET "${out}" rows ${i} per_ray ${key})
+    endforeach()
+    set(what "${kind} ${method} ${isa}: ${nodes} nodes, ${leaves} leaves, ${triangles} triangles, utilisation ${node_utilization} / ${leaf_utilization}")
+    if((method STREQUAL "single" OR method STREQUAL "wide") AND nodes LESS 1)
+      message(FATAL_ERROR "${what}: fewer node tests than rays")
+    endif()
+    if(NOT nodes GREATER 0 OR NOT leaves GREATER 0 OR triangles LESS leaves)
+      message(FATAL_ERROR "${what}: impossible counts")
+    endif()
+    foreach(u ${node_utilization} ${leaf_utilization})
+      if(NOT u GREATER 0 OR u GREATER 1)
+        message(FATAL_ERROR "${what}: a utilisation outside (0, 1]")
+      endif()
+    endforeach()
+    math(EXPR counted "${counted} + 1")
+    message(STATUS "${what}")
+  endforeach()
+  if(counted EQUAL 0)
+    message(FATAL_ERROR "no lanes row was counted")
+  endif()
+  # and the table prints them, one line per counted row
+  execute_process(COMMAND ${CLI} compare --quick --reps 1 --threads 1 --stats
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  string(FIND "${out}" "traversal per ray" at)
+  if(NOT rc EQUAL 0 OR at LESS 0)
+    message(FATAL_ERROR "lanes compare --stats: exit ${rc}, no counter table: ${err}")
+  endif()
+  string(SUBSTRING "${out}" ${at} -1 table)
+  string(REGEX MATCHALL "\n(primary|shadow|diffuse|diffuse-shuffled) +(single|wide|hybrid|stream) " lines "${table}")
+  list(LENGTH lines printed)
+  if(NOT printed EQUAL counted)
+    message(FATAL_ERROR "the counter table has ${printed} rows, the JSON ${counted}")
+  endif()
 else()
   foreach(args "--threads;0" "--rays;x" "--embree-isa;foo" "--bogus" "default;extra"
           "no-such-scene" "--isa;nope" "--scale;0" "--scale;nan" "--translate;1e40"
@@ -136,10 +199,12 @@ endif()
 ]=])
   add_test(NAME compare.json COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:lanes_cli> -DMODE=json
            -P ${lanes_compare_check})
+  add_test(NAME compare.stats COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:lanes_cli> -DMODE=stats
+           -P ${lanes_compare_check})
   add_test(NAME compare.badargs COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:lanes_cli>
            -DMODE=badargs -P ${lanes_compare_check})
   add_test(NAME compare.judged COMMAND ${CMAKE_COMMAND} -DCLI=$<TARGET_FILE:lanes_cli> -DMODE=judged
            -P ${lanes_compare_check})
-  set_tests_properties(compare.json compare.badargs compare.judged PROPERTIES LABELS compare TIMEOUT 600
+  set_tests_properties(compare.json compare.stats compare.badargs compare.judged PROPERTIES LABELS compare TIMEOUT 600
     ENVIRONMENT_MODIFICATION "${LANES_TEST_ENV}")
 endif()
