@@ -350,6 +350,10 @@ static void count_config(const config *cf, size_t n, lanes_trace_stats *out)
 
 static double per(uint64_t a, uint64_t b) { return b ? (double)a / (double)b : 0.0; }
 
+/* --stats counts lanes' configurations but packets, whose counters count
+ * rays per lane, not children and triangles (lanes study reports theirs). */
+static bool countable(const config *cf) { return !cf->embree && !cf->lj.packet; }
+
 static void run_config(lanes_pool *p, config *cf, size_t n, double *seconds)
 {
     double s;
@@ -444,13 +448,13 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             for (int i = 0; i < ncfg; i++)
                 run_config(&c->pools[pi], &cfg[i], n, round < 0 ? NULL : &cfg[i].seconds[pi][round]);
     if (lanes_embree_error(c->embree)[0]) cli_fail("compare: %s", lanes_embree_error(c->embree));
-    /* packets count rays per lane, not children and triangles: lanes study
-     * reports theirs */
-    lanes_trace_stats *counts = calloc((size_t)ncfg, sizeof *counts);
-    if (!counts) cli_fail("compare: out of memory");
-    if (c->opt.stats)
+    lanes_trace_stats *counts = NULL;
+    if (c->opt.stats) {
+        counts = calloc((size_t)ncfg, sizeof *counts);
+        if (!counts) cli_fail("compare: out of memory");
         for (int i = 0; i < ncfg; i++)
-            if (!cfg[i].embree && !cfg[i].lj.packet) count_config(&cfg[i], n, &counts[i]);
+            if (countable(&cfg[i])) count_config(&cfg[i], n, &counts[i]);
+    }
 
     /* rows: per thread count, lanes then Embree; ratios against the best
      * Embree row of the same rays and threads */
@@ -467,13 +471,15 @@ static void run_kind(compare *c, ray_kind kind, const lanes_ray *rays, size_t n)
             w->threads = c->pools[pi].threads;
             w->mrays = s > 0 ? (double)n / s * 1e-6 : 0.0;
             if (w->embree && w->mrays > best) best = w->mrays;
-            const lanes_trace_stats *t = &counts[i];
-            w->counted = c->opt.stats && !cfg[i].embree && !cfg[i].lj.packet;
-            w->nodes = per(t->nodes_visited, t->rays);
-            w->leaves = per(t->leaves_visited, t->rays);
-            w->triangles = per(t->triangles_tested, t->rays);
-            w->node_util = per(t->node_lanes.active_lanes, t->node_lanes.lane_slots);
-            w->leaf_util = per(t->leaf_lanes.active_lanes, t->leaf_lanes.lane_slots);
+            w->counted = counts && countable(&cfg[i]);
+            if (w->counted) {
+                const lanes_trace_stats *t = &counts[i];
+                w->nodes = per(t->nodes_visited, t->rays);
+                w->leaves = per(t->leaves_visited, t->rays);
+                w->triangles = per(t->triangles_tested, t->rays);
+                w->node_util = per(t->node_lanes.active_lanes, t->node_lanes.lane_slots);
+                w->leaf_util = per(t->leaf_lanes.active_lanes, t->leaf_lanes.lane_slots);
+            }
         }
         for (size_t i = first; i < c->res.count; i++)
             c->res.rows[i].ratio = best > 0 ? c->res.rows[i].mrays / best : 0.0;
