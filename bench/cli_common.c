@@ -293,6 +293,27 @@ cli_cpu_signature cli_cpu_signature_read(void)
     return s;
 }
 
+void cli_cpu_description(char *buf, size_t size)
+{
+    const char *brand = lanes_cpu()->brand;
+    cli_cpu_signature sig = cli_cpu_signature_read();
+    snprintf(buf, size, "%s (family 0x%x, model 0x%x)", brand[0] ? brand : "unknown CPU", sig.family,
+             sig.model);
+}
+
+#define CLI_STR_(x) #x
+#define CLI_VERSION_(a, b, c) CLI_STR_(a) "." CLI_STR_(b) "." CLI_STR_(c)
+const char *cli_compiler(void)
+{
+#if defined(__clang__)
+    return "clang " CLI_VERSION_(__clang_major__, __clang_minor__, __clang_patchlevel__);
+#elif defined(__GNUC__)
+    return "gcc " CLI_VERSION_(__GNUC__, __GNUC_MINOR__, __GNUC_PATCHLEVEL__);
+#else
+    return "unknown compiler";
+#endif
+}
+
 /* Length of the valid UTF-8 sequence at s, or 0 when it is not valid. */
 static size_t utf8_length(const unsigned char *s)
 {

@@ -226,9 +226,11 @@ static double ratio(const row_list *rows, const acc_plan *plan, const char *mesh
 static void write_tables(FILE *f, const row_list *rows, const acc_plan *plan, char meshes[][64],
                          char notes[][320])
 {
-    fprintf(f, "# lanes accuracy\n\nCPU: %s. Each mesh scaled to a bounding-box diagonal of %g and centred on the "
-               "origin, then every coordinate translated by T and rounded to float.\n",
-            lanes_cpu()->brand, plan->size);
+    char cpu[160];
+    cli_cpu_description(cpu, sizeof cpu);
+    fprintf(f, "# lanes accuracy\n\nCPU: %s; built by %s. Each mesh scaled to a bounding-box diagonal of %g and "
+               "centred on the origin, then every coordinate translated by T and rounded to float.\n",
+            cpu, cli_compiler(), plan->size);
     for (int m = 0; m < plan->nmeshes; m++)
         if (notes[m][0]) fprintf(f, "Note: %s.\n", notes[m]);
     fprintf(f,

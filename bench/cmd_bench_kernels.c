@@ -935,6 +935,7 @@ static int bench_kernels_run(cli_context *ctx, const cli_command *self, int argc
     printf("lanes bench kernels\n");
     printf("cpu:       %s (%s, family 0x%x model 0x%x stepping %u)\n", cpuf->brand, cpuf->vendor,
            sig.family, sig.model, sig.stepping);
+    printf("compiler:  %s\n", cli_compiler());
     printf("selected:  %s (%d lanes; %s)\n", lanes_isa_name(selected), lanes_isa_lanes(selected),
            cli_isa_selection_reason(ctx, reason, sizeof reason));
     printf("measured:  ");

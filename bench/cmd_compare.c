@@ -586,7 +586,11 @@ static void print_json(const compare *c, double embree_build)
     printf("{\n  \"scene\": ");
     cli_json_string(stdout, c->scene.name[0] ? c->scene.name : c->opt.scene_spec);
     printf(",\n  \"triangles\": %zu,\n  \"cpu\": ", c->scene.triangle_count);
-    cli_json_string(stdout, lanes_cpu()->brand);
+    char cpu[160];
+    cli_cpu_description(cpu, sizeof cpu);
+    cli_json_string(stdout, cpu);
+    printf(",\n  \"compiler\": ");
+    cli_json_string(stdout, cli_compiler());
     printf(",\n  \"embree_version\": ");
     cli_json_string(stdout, RTC_VERSION_STRING);
     printf(",\n  \"embree_isa\": ");
@@ -821,7 +825,10 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     char features[512];
     lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
     if (!o->json) {
-        printf("cpu:      %s\n", lanes_cpu()->brand[0] ? lanes_cpu()->brand : "(unknown)");
+        char cpu[160];
+        cli_cpu_description(cpu, sizeof cpu);
+        printf("cpu:      %s\n", cpu);
+        printf("compiler: %s\n", cli_compiler());
         printf("features: %s\n", features);
         printf("lanes:    ");
         for (int i = 0; i < c->isa_count; i++)

@@ -32,6 +32,7 @@ static void print_text(const info *in)
            in->sig.stepping);
     lanes_cpu_feature_list(cpu->bits, buf, sizeof buf);
     printf("features:     %s\n", buf[0] ? buf : "(none)");
+    printf("compiler:     %s\n", cli_compiler());
     uint32_t not_enabled = cpu->cpuid_bits & ~cpu->raw_bits;
     if (not_enabled) {
         lanes_cpu_feature_list(not_enabled, buf, sizeof buf);
@@ -127,6 +128,9 @@ static void print_json(const info *in)
     cli_json_string(stdout, cpu->vendor);
     printf(",\n  \"family\": %u,\n  \"model\": %u,\n  \"stepping\": %u,\n", in->sig.family,
            in->sig.model, in->sig.stepping);
+    printf("  \"compiler\": ");
+    cli_json_string(stdout, cli_compiler());
+    printf(",\n");
     printf("  \"features\": ");
     json_feature_array(cpu->bits);
     printf(",\n  \"features_detected\": ");

@@ -142,6 +142,20 @@ if(lanes_cli_target)
     endif()
   endforeach()
 
+  # Every benchmark names the compiler that built it: the one CMake found
+  # (its id and version), not a name the program assumed.
+  if(CMAKE_C_COMPILER_ID STREQUAL "Clang")
+    set(lanes_expected_compiler "clang ${CMAKE_C_COMPILER_VERSION}")
+  elseif(CMAKE_C_COMPILER_ID STREQUAL "GNU")
+    set(lanes_expected_compiler "gcc ${CMAKE_C_COMPILER_VERSION}")
+  endif()
+  if(lanes_expected_compiler)
+    add_test(NAME cli.compiler
+      COMMAND bash -c "out=$(\"$0\" info --json) && echo \"$out\" | grep -F \"\\\"compiler\\\": \\\"$1\\\"\" && \"$0\" info | grep -Fx \"compiler:     $1\""
+              $<TARGET_FILE:${lanes_cli_target}> "${lanes_expected_compiler}")
+    set_tests_properties(cli.compiler PROPERTIES LABELS cli TIMEOUT 60)
+  endif()
+
   # Output paths: missing folders are made; a path that cannot be written
   # is refused with the path and the OS's reason, status 2.
   set(lanes_out_test ${CMAKE_CURRENT_BINARY_DIR}/cli_outputs)
