@@ -267,7 +267,12 @@ static inline void prefetch_child(const lanes_wbvh *wb, uint32_t ref)
     for (int l = 0; l < lines; l++) __builtin_prefetch(p + 64 * l);
 }
 
-/* Inserts c into base[0 .. n), kept in decreasing entry distance. */
+/* Inserts c into base[0 .. n), kept in decreasing entry distance. A
+ * stable network of neighbour exchanges for three and four children, free
+ * of data-dependent branches, measured the same (1.00x, geometric mean over
+ * dragon, sponza-bunny and 20-bunnies, every ray kind and scheme, avx2, Zen
+ * 4, clang 14, alternating runs; rows 0.93-1.08, as far as shadow rows
+ * moved, whose code it did not change), so this simpler loop stays. */
 static inline int insert_nearest_last(wide_entry *base, int n, wide_entry c)
 {
     int k = n;
