@@ -125,9 +125,9 @@ LANES_BODY bool packet_setup(const lanes_ray *rays, uint32_t live, lanes_accurac
  * tfar, and their entry distances in *tin (node_hits' arithmetic per ray).
  * Skipping it, so that a child the frustum keeps takes every active ray
  * with the frustum's entry bound (the frustum alone deciding the descent),
- * made the hybrid rows 0.50x as fast (geometric mean, dragon, sponza-bunny
- * and 20-bunnies, avx2, Zen 4): primary rays 0.73-0.94x, shadow rays
- * 0.03-0.13x, whose frusta, from many origins, are loose; each ray then
+ * slowed the packets on dragon, sponza-bunny and 20-bunnies (avx2, Zen 4,
+ * clang 14, alternating runs): primary rays to 0.73-0.94x, shadow rays,
+ * whose frusta from many origins are loose, to 0.03-0.13x. Each ray then
  * tests leaves its own box test would have culled. */
 LANES_BODY vmask packet_child(const float *node, int j, const packet_rays *p, int slab, vfloat tfar,
                               vfloat *tin_out)

@@ -33,10 +33,11 @@ typedef struct {
  * first with det's sign folded into the numerators and dividing only when
  * a lane passes (Embree's form) made the traversals slower, not faster:
  * 0.95x, geometric mean over dragon, sponza-bunny and 20-bunnies, every ray
- * kind, avx2, Zen 4 (lanes compare, alternating runs); only sponza-bunny's
- * shadow rays gained (1.05-1.19x). Our reading, not measured: that branch is hard to
- * predict, while the division delays nothing once the leaf's miss is
- * predicted and the walk runs on speculatively. */
+ * kind, avx2, Zen 4, clang 14 (lanes compare, alternating runs); only
+ * sponza-bunny's shadow rays gained (1.05-1.19x). Our reading, not
+ * measured: that branch is hard to predict, while the division delays
+ * nothing once the leaf's miss is predicted and the walk runs on
+ * speculatively. */
 LANES_BODY tri_result moller_core(vfloat ox, vfloat oy, vfloat oz, vfloat dx, vfloat dy, vfloat dz,
                                   vfloat v0x, vfloat v0y, vfloat v0z, vfloat v1x, vfloat v1y,
                                   vfloat v1z, vfloat v2x, vfloat v2y, vfloat v2z, vfloat tnear,
