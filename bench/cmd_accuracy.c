@@ -586,7 +586,9 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
         if (plan.isas[i])
             snprintf(sets + strlen(sets), sizeof sets - strlen(sets), "%s%s", sets[0] ? " " : "",
                      lanes_isa_name((lanes_isa)i));
-    fprintf(report, "CPU: %s; sets: %s; size %g; translations", lanes_cpu()->brand, sets, plan.size);
+    char cpu[160];
+    cli_cpu_description(cpu, sizeof cpu);
+    fprintf(report, "CPU: %s; built by %s; sets: %s; size %g; translations", cpu, cli_compiler(), sets, plan.size);
     for (int t = 0; t < plan.ntranslations; t++) fprintf(report, "%s%g", t ? ", " : " ", plan.translations[t]);
     fprintf(report, "\n");
     fflush(report);

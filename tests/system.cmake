@@ -142,8 +142,10 @@ if(lanes_cli_target)
     endif()
   endforeach()
 
-  # Every benchmark names the compiler that built it: the one CMake found
-  # (its id and version), not a name the program assumed.
+  # Every benchmark names the compiler that built it. The expected name is
+  # CMake's reading of the compiler (its id and version); both come from the
+  # compiler's own version macros, so this catches a wrong branch, a
+  # fallback or a format slip in cli_compiler(), not a lying compiler.
   if(CMAKE_C_COMPILER_ID STREQUAL "Clang")
     set(lanes_expected_compiler "clang ${CMAKE_C_COMPILER_VERSION}")
   elseif(CMAKE_C_COMPILER_ID STREQUAL "GNU")
@@ -151,7 +153,7 @@ if(lanes_cli_target)
   endif()
   if(lanes_expected_compiler)
     add_test(NAME cli.compiler
-      COMMAND bash -c "out=$(\"$0\" info --json) && echo \"$out\" | grep -F \"\\\"compiler\\\": \\\"$1\\\"\" && \"$0\" info | grep -Fx \"compiler:     $1\""
+      COMMAND bash -c "json=$(\"$0\" info --json) && text=$(\"$0\" info) && grep -F \"\\\"compiler\\\": \\\"$1\\\"\" <<< \"$json\" && grep -Fx \"compiler:     $1\" <<< \"$text\""
               $<TARGET_FILE:${lanes_cli_target}> "${lanes_expected_compiler}")
     set_tests_properties(cli.compiler PROPERTIES LABELS cli TIMEOUT 60)
   endif()

@@ -34,7 +34,8 @@ typedef struct {
  * a lane passes (Embree's form) made the traversals slower, not faster:
  * 0.95x, geometric mean over dragon, sponza-bunny and 20-bunnies, every ray
  * kind, avx2, Zen 4, clang 14 (lanes compare, alternating runs); only
- * sponza-bunny's shadow rays gained (1.05-1.19x). Our reading, not
+ * sponza-bunny's shadow rays gained (1.05-1.19x, partly inside the run-to-
+ * run noise of about +-12%). Our reading, not
  * measured: that branch is hard to predict, while the division delays
  * nothing once the leaf's miss is predicted and the walk runs on
  * speculatively. */

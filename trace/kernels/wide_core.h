@@ -271,9 +271,9 @@ static inline void prefetch_child(const lanes_wbvh *wb, uint32_t ref)
  * stable network of neighbour exchanges for three and four children, free
  * of data-dependent branches, measured the same (1.00x, geometric mean over
  * dragon, sponza-bunny and 20-bunnies, every ray kind and scheme, avx2, Zen
- * 4, clang 14, alternating runs; rows 0.93-1.10, inside the noise: the
- * shadow rows, whose code it left alone, moved 0.88-1.12), so this simpler
- * loop stays. */
+ * 4, clang 14, alternating runs; the other rows 0.93-1.10, inside the
+ * noise: the shadow rows, whose code it left alone, moved 0.88-1.12), so
+ * this simpler loop stays. */
 static inline int insert_nearest_last(wide_entry *base, int n, wide_entry c)
 {
     int k = n;
