@@ -142,7 +142,7 @@ if(lanes_cli_target)
     endif()
   endforeach()
 
-  # Every benchmark names the compiler that built it. The expected name is
+  # The CLI's benchmarks name the compiler that built them. The expected name is
   # CMake's reading of the compiler (its id and version); both come from the
   # compiler's own version macros, so this catches a wrong branch, a
   # fallback or a format slip in cli_compiler(), not a lying compiler.
