@@ -293,12 +293,18 @@ cli_cpu_signature cli_cpu_signature_read(void)
     return s;
 }
 
-void cli_cpu_description(char *buf, size_t size)
+/* Made once, on the first call (from the main thread): the CPU does not
+ * change during a run. */
+const char *cli_cpu_description(void)
 {
-    const char *brand = lanes_cpu()->brand;
-    cli_cpu_signature sig = cli_cpu_signature_read();
-    snprintf(buf, size, "%s (family 0x%x, model 0x%x)", brand[0] ? brand : "unknown CPU", sig.family,
-             sig.model);
+    static char text[160];
+    if (!text[0]) {
+        const char *brand = lanes_cpu()->brand;
+        cli_cpu_signature sig = cli_cpu_signature_read();
+        snprintf(text, sizeof text, "%s (family 0x%x, model 0x%x)", brand[0] ? brand : "unknown CPU",
+                 sig.family, sig.model);
+    }
+    return text;
 }
 
 #define CLI_STR_(x) #x

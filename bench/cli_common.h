@@ -117,7 +117,7 @@ cli_cpu_signature cli_cpu_signature_read(void);
 /* "AMD EPYC (family 0x19, model 0x11)": a brand string alone may not tell
  * one generation from the next (a Zen 4 virtual machine has reported
  * just "AMD EPYC"), and every figure needs its CPU. */
-void cli_cpu_description(char *buf, size_t size);
+const char *cli_cpu_description(void);
 /* The compiler that built this program, and with it the kernels (one
  * CMake configure compiles both): "clang 14.0.6", "gcc 12.2.0". The same
  * kernels ran 7-10% apart between those two at avx2 and avx512, and 1.6x

@@ -226,11 +226,9 @@ static double ratio(const row_list *rows, const acc_plan *plan, const char *mesh
 static void write_tables(FILE *f, const row_list *rows, const acc_plan *plan, char meshes[][64],
                          char notes[][320])
 {
-    char cpu[160];
-    cli_cpu_description(cpu, sizeof cpu);
     fprintf(f, "# lanes accuracy\n\nCPU: %s; built by %s. Each mesh scaled to a bounding-box diagonal of %g and "
                "centred on the origin, then every coordinate translated by T and rounded to float.\n",
-            cpu, cli_compiler(), plan->size);
+            cli_cpu_description(), cli_compiler(), plan->size);
     for (int m = 0; m < plan->nmeshes; m++)
         if (notes[m][0]) fprintf(f, "Note: %s.\n", notes[m]);
     fprintf(f,
@@ -586,9 +584,8 @@ static int accuracy_run(cli_context *ctx, const cli_command *self, int argc, cha
         if (plan.isas[i])
             snprintf(sets + strlen(sets), sizeof sets - strlen(sets), "%s%s", sets[0] ? " " : "",
                      lanes_isa_name((lanes_isa)i));
-    char cpu[160];
-    cli_cpu_description(cpu, sizeof cpu);
-    fprintf(report, "CPU: %s; built by %s; sets: %s; size %g; translations", cpu, cli_compiler(), sets, plan.size);
+    fprintf(report, "CPU: %s; built by %s; sets: %s; size %g; translations", cli_cpu_description(), cli_compiler(),
+            sets, plan.size);
     for (int t = 0; t < plan.ntranslations; t++) fprintf(report, "%s%g", t ? ", " : " ", plan.translations[t]);
     fprintf(report, "\n");
     fflush(report);

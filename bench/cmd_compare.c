@@ -586,9 +586,7 @@ static void print_json(const compare *c, double embree_build)
     printf("{\n  \"scene\": ");
     cli_json_string(stdout, c->scene.name[0] ? c->scene.name : c->opt.scene_spec);
     printf(",\n  \"triangles\": %zu,\n  \"cpu\": ", c->scene.triangle_count);
-    char cpu[160];
-    cli_cpu_description(cpu, sizeof cpu);
-    cli_json_string(stdout, cpu);
+    cli_json_string(stdout, cli_cpu_description());
     printf(",\n  \"compiler\": ");
     cli_json_string(stdout, cli_compiler());
     printf(",\n  \"embree_version\": ");
@@ -825,9 +823,7 @@ static int compare_run(cli_context *ctx, const cli_command *self, int argc, char
     char features[512];
     lanes_cpu_feature_list(lanes_cpu()->bits, features, sizeof features);
     if (!o->json) {
-        char cpu[160];
-        cli_cpu_description(cpu, sizeof cpu);
-        printf("cpu:      %s\n", cpu);
+        printf("cpu:      %s\n", cli_cpu_description());
         printf("compiler: %s\n", cli_compiler());
         printf("features: %s\n", features);
         printf("lanes:    ");

@@ -186,10 +186,8 @@ static int paths_run(cli_context *ctx, const cli_command *self, int argc, char *
     } else {
         printf("%s: %zu triangles, %zu materials; %dx%d, %d spp, depth %d\n", scene.name, scene.triangle_count,
                scene.material_count, r.width, r.height, o.spp, o.depth);
-        char cpu[160];
-        cli_cpu_description(cpu, sizeof cpu);
         printf("method %s, isa %s (%d lanes), %d threads, on %s, built by %s\n", lanes_paths_method_name(o.method),
-               k->name, k->lanes, threads, cpu, cli_compiler());
+               k->name, k->lanes, threads, cli_cpu_description(), cli_compiler());
         if (engine)
             printf("intersector: Embree %s (rtcIntersect1M, rtcOccluded1M; one ray: rtcIntersect1, rtcOccluded1), shading by %s\n",
                    engine, k->name);

@@ -482,11 +482,9 @@ static void write_tables(const char *path, const row_list *rows, char scenes[][6
                          const study_plan *plan)
 {
     FILE *f = cli_create_file("study", path);
-    char cpu[160];
-    cli_cpu_description(cpu, sizeof cpu);
     fprintf(f, "# lanes width-scaling study\n\nCPU: %s; built by %s. Image %dx%d, packets of %d rays, %d thread(s), "
                "accuracy mode %s, median of %d run(s). Times in seconds.\n\n",
-            cpu, cli_compiler(), plan->width, plan->height, plan->packet, plan->threads,
+            cli_cpu_description(), cli_compiler(), plan->width, plan->height, plan->packet, plan->threads,
             lanes_accuracy_name(LANES_STUDY_ACCURACY), plan->reps);
     const char *queues[] = {"none", "CORNER", "MAX", "arrival"};
     int best_q = plan->queue_size_count ? plan->queue_sizes[0] : 1024;

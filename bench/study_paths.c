@@ -302,11 +302,8 @@ static void write_tables(const char *path, const paths_rows *rows, char scenes[]
 {
     FILE *f = cli_create_file("study --paths", path);
     fprintf(f, "# Path tracing with shading coherence (Afra et al. 2016)\n\n");
-    char cpu[160];
-    cli_cpu_description(cpu, sizeof cpu);
-    fprintf(f, "CPU: %s; built by %s; %dx%d, %d spp, %d thread(s), median of %d runs.\n", cpu, cli_compiler(),
-            o->width, o->height,
-            o->spp, o->threads, o->reps);
+    fprintf(f, "CPU: %s; built by %s; %dx%d, %d spp, %d thread(s), median of %d runs.\n", cli_cpu_description(),
+            cli_compiler(), o->width, o->height, o->spp, o->threads, o->reps);
     for (int s = 0; s < nscenes; s++) {
         fprintf(f, "\n## %s: methods (the scene's own materials)\n\n", scenes[s]);
         fprintf(f, "| set | lanes | method | Mrays/s | vs single | shading utilisation |\n|---|---|---|---|---|---|\n");
