@@ -54,7 +54,7 @@ void lanes_wbvh_free(lanes_wbvh *w)
 lanes_status lanes_wbvh_share(lanes_wbvh *w, const float *verts, const uint32_t *indices, lanes_error *err)
 {
     size_t stride = lanes_wblock_id_bytes(w->width);
-    unsigned char *ids = lanes_big_alloc(w->block_count ? w->block_count : 1, stride);
+    unsigned char *ids = lanes_big_alloc_full(w->block_count ? w->block_count : 1, stride);
     if (!ids) return lanes_error_set(err, LANES_ERR_OUT_OF_MEMORY, "wide bvh: out of memory");
     memset(ids, 0xff, (w->block_count ? w->block_count : 1) * stride);
     for (size_t b = 0; b < w->block_count; b++)
@@ -200,9 +200,9 @@ static bool plan_collapse(const lanes_bvh2 *bvh, size_t W, collapse_plan *p, con
     const double ct = bvh->traversal_cost, ci = bvh->intersect_cost;
     p->nodes = nd;
     p->width = W;
-    p->cost = lanes_big_alloc(nn * W, sizeof *p->cost);
-    p->split = lanes_big_alloc(nn * W, sizeof *p->split);
-    uint32_t *order = lanes_big_alloc(nn, sizeof *order);
+    p->cost = lanes_big_alloc_full(nn * W, sizeof *p->cost);
+    p->split = lanes_big_alloc_full(nn * W, sizeof *p->split);
+    uint32_t *order = lanes_big_alloc_full(nn, sizeof *order);
     uint32_t *stack = lanes_big_alloc(nn + 1, sizeof *stack);
     bool ok = p->cost && p->split && order && stack;
     *why = "out of memory";
@@ -369,8 +369,8 @@ lanes_status lanes_wbvh_from_bvh2(const lanes_bvh2 *bvh, int width, lanes_wbvh *
         out->node_count = count;
         out->block_count = blocks;
         out->prim_count = bvh->prim_count;
-        out->nodes = lanes_big_alloc(count, lanes_wnode_bytes(width));
-        out->blocks = lanes_big_alloc(blocks ? blocks : 1, lanes_wblock_bytes(width));
+        out->nodes = lanes_big_alloc_full(count, lanes_wnode_bytes(width));
+        out->blocks = lanes_big_alloc_full(blocks ? blocks : 1, lanes_wblock_bytes(width));
         ok = out->nodes && out->blocks;
     }
     double sah = 0.0, root_area = 0.0;
