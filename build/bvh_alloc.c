@@ -1,22 +1,21 @@
-/* lanes_big_alloc_full: the Linux prefault behind it. */
+/* lanes_prefault: the Linux call behind it. */
 #define _GNU_SOURCE /* madvise, MADV_POPULATE_WRITE */
 #include "build/bvh_alloc.h"
 
 #include <stdint.h>
 #include <sys/mman.h>
 
-void *lanes_big_alloc_full(size_t count, size_t elem)
+void lanes_prefault(void *p, size_t bytes)
 {
-    unsigned char *p = lanes_big_alloc(count, elem);
-    if (!p) return NULL;
-    /* MADV_POPULATE_WRITE came with Linux 5.14; older kernels reject it
-     * (EINVAL), and the pages then fault in one at a time as before. An
-     * error here changes nothing the build computes, so it is ignored. */
+    if (bytes < ((size_t)1 << 20)) return;
+    /* An error (EINVAL before Linux 5.14, ENOMEM) changes nothing the
+     * caller computes: the pages then fault in one at a time as before. */
 #ifdef MADV_POPULATE_WRITE
-    const uintptr_t page = 4096;
+    const uintptr_t page = 4096; /* x86-64's base page */
     uintptr_t lo = ((uintptr_t)p + page - 1) / page * page;
-    uintptr_t hi = ((uintptr_t)p + count * elem) / page * page;
+    uintptr_t hi = ((uintptr_t)p + bytes) / page * page;
     if (hi > lo) (void)madvise((void *)lo, hi - lo, MADV_POPULATE_WRITE);
+#else
+    (void)p;
 #endif
-    return p;
 }

@@ -3,6 +3,8 @@
  * Compiled for the x86-64 baseline. */
 #include "build/layout.h"
 
+#include "build/bvh_alloc.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -29,6 +31,7 @@ static bool alloc_arrays(float **arrays[], int n, size_t count, size_t *capacity
             for (int j = 0; j < i; j++) free(*arrays[j]), *arrays[j] = NULL;
             return false;
         }
+        lanes_prefault(*arrays[i], cap * sizeof(float));
         memset(*arrays[i], 0, cap * sizeof(float));
     }
     *capacity = cap;
