@@ -25,8 +25,9 @@ static inline void *lanes_big_alloc(size_t count, size_t elem)
  * the caller is about to write in full. Each fault is a trap into the
  * kernel, and more costly in a virtual machine: on a 2-core Zen 5 VM, the
  * 1.5M-triangle builds of bench_bvh_build spent about a quarter of their
- * time in faults. Does nothing below 1 MiB, where the faults cost less than
- * the call, or where the kernel cannot (Linux before 5.14). */
+ * time in faults (perf). Does nothing below 1 MiB, 256 pages, a threshold
+ * chosen, not measured, to keep the call off small arrays; nor where the
+ * kernel cannot (Linux before 5.14). */
 void lanes_prefault(void *p, size_t bytes);
 
 /* lanes_big_alloc for an array the build will write in full. Only for
