@@ -216,8 +216,8 @@ static inline void bin_grow(bin *t, f4 lo, f4 hi)
 static inline void bin_one(const binner *bn, const prim_ref *p, bin *bx, bin *by, bin *bz)
 {
     /* A reference's corners with lane 3 (the id and the valid flag) zeroed:
-     * as floats those bits are denormals, which would slow the arithmetic
-     * below on some CPUs. */
+     * read as floats, the flag and ids below 2^23 are denormals, which
+     * would slow the arithmetic below on some CPUs. */
     const i4 xyz = {-1, -1, -1, 0};
     const unsigned char *bytes = (const unsigned char *)p;
     f4 lo, hi;
@@ -1044,8 +1044,10 @@ lanes_status lanes_bvh2_build(const lanes_scene *scene, const lanes_bvh_build_op
     if (B->task_size < (uint32_t)B->maxleaf) B->task_size = (uint32_t)B->maxleaf;
     bool need_second = n > B->task_size;
     if (need_second || n < B->ntri) {
-        B->buf[1] = lanes_big_alloc_full(B->ntri, sizeof(prim_ref));
+        /* only [0, n) is written: the refs of the triangles kept */
+        B->buf[1] = lanes_big_alloc(B->ntri, sizeof(prim_ref));
         if (!B->buf[1]) goto done;
+        lanes_prefault(B->buf[1], n * sizeof(prim_ref));
     }
     B->root_buf = 0;
     if (n < B->ntri) {
