@@ -117,12 +117,16 @@ static inline double half_area_d(const aabb *b)
     return dx * dy + dy * dz + dz * dx;
 }
 
-/* Half the surface area; an empty box has none. */
-static inline float half_area(const aabb *b)
+/* Half the surface area of a box of these extents; an empty box has none. */
+static inline float extent_half_area(float dx, float dy, float dz)
 {
-    float dx = b->hi[0] - b->lo[0], dy = b->hi[1] - b->lo[1], dz = b->hi[2] - b->lo[2];
     if (!(dx >= 0.0f && dy >= 0.0f && dz >= 0.0f)) return 0.0f;
     return dx * dy + dy * dz + dz * dx;
+}
+
+static inline float half_area(const aabb *b)
+{
+    return extent_half_area(b->hi[0] - b->lo[0], b->hi[1] - b->lo[1], b->hi[2] - b->lo[2]);
 }
 
 static int ceil_log2(size_t n)
@@ -206,10 +210,23 @@ static inline f4 f4_select(i4 m, f4 a, f4 b) { return (f4)(((i4)a & m) | ((i4)b 
 static inline f4 f4_min(f4 a, f4 b) { return f4_select(a < b, a, b); }
 static inline f4 f4_max(f4 a, f4 b) { return f4_select(a > b, a, b); }
 
-static inline void bin_grow(bin *t, f4 lo, f4 hi)
+/* Grows the box (lo, hi) by bin b's; the current box is min's and max's
+ * first operand, as it was aabb_grow's. */
+static inline void box_add_bin(f4 *lo, f4 *hi, const bin *b)
+{
+    *lo = f4_min(*lo, f4_load(b->lo));
+    *hi = f4_max(*hi, f4_load(b->hi));
+}
+
+static inline void bin_add_box(bin *t, f4 lo, f4 hi)
 {
     f4_store(t->lo, f4_min(f4_load(t->lo), lo));
     f4_store(t->hi, f4_max(f4_load(t->hi), hi));
+}
+
+static inline void bin_grow(bin *t, f4 lo, f4 hi)
+{
+    bin_add_box(t, lo, hi);
     t->n++;
 }
 
@@ -238,16 +255,13 @@ static inline void bin_one(const binner *bn, const prim_ref *p, bin *bx, bin *by
 static inline float bin_half_area(f4 lo, f4 hi)
 {
     f4 d = hi - lo;
-    float dx = d[0], dy = d[1], dz = d[2];
-    if (!(dx >= 0.0f && dy >= 0.0f && dz >= 0.0f)) return 0.0f;
-    return dx * dy + dy * dz + dz * dx;
+    return extent_half_area(d[0], d[1], d[2]);
 }
 
 static void bins_merge(bin *dst, const bin *src, int count)
 {
     for (int i = 0; i < count; i++) {
-        f4_store(dst[i].lo, f4_min(f4_load(dst[i].lo), f4_load(src[i].lo)));
-        f4_store(dst[i].hi, f4_max(f4_load(dst[i].hi), f4_load(src[i].hi)));
+        bin_add_box(&dst[i], f4_load(src[i].lo), f4_load(src[i].hi));
         dst[i].n += src[i].n;
     }
 }
@@ -301,8 +315,7 @@ static bool find_split(const binner *bn, const bin *bins, uint32_t block, split 
         rarea[m - 1] = bin_half_area(lo, hi);
         rcount[m - 1] = n;
         for (int t = m - 2; t > 0; t--) {
-            lo = f4_min(lo, f4_load(b[used[t]].lo));
-            hi = f4_max(hi, f4_load(b[used[t]].hi));
+            box_add_bin(&lo, &hi, &b[used[t]]);
             n += b[used[t]].n;
             rarea[t] = bin_half_area(lo, hi);
             rcount[t] = n;
@@ -310,10 +323,7 @@ static bool find_split(const binner *bn, const bin *bins, uint32_t block, split 
         lo = f4_load(b[used[0]].lo), hi = f4_load(b[used[0]].hi);
         n = 0;
         for (int t = 1; t < m; t++) {
-            if (t > 1) {
-                lo = f4_min(lo, f4_load(b[used[t - 1]].lo));
-                hi = f4_max(hi, f4_load(b[used[t - 1]].hi));
-            }
+            if (t > 1) box_add_bin(&lo, &hi, &b[used[t - 1]]);
             n += b[used[t - 1]].n;
             float cost = (float)sah_blocks(n, block) * bin_half_area(lo, hi) + (float)sah_blocks(rcount[t], block) * rarea[t];
             if (cost < best) {
